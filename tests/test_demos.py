@@ -1,0 +1,40 @@
+# SPDX-License-Identifier: MIT
+"""Every demo runs (shortened) and writes what its header promises."""
+
+import csv
+import importlib.util
+from pathlib import Path
+
+import pytest
+from mpi4py import MPI
+
+DEMOS = Path(__file__).resolve().parents[1] / "demos"
+
+
+def _load(name):
+    spec = importlib.util.spec_from_file_location(name, DEMOS / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_normal_compliance_1d_demo(shared_tmp_path):
+    demo = _load("normal_compliance_1d")
+    out = shared_tmp_path / "nc1d"
+    demo.main(["--out", str(out), "--r", "0.1", "0.05"])
+    MPI.COMM_WORLD.barrier()
+    with open(out / "errors.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert list(rows[0]) == ["r", "h", "k", "err_VQ", "err_nodal"]
+    assert [float(row["r"]) for row in rows] == [0.1, 0.05]
+    assert all(0 < float(row["err_nodal"]) < 0.02 for row in rows)
+    for name in ("fig5_displacements.png", "fig6_evolution.png", "fig7_error_constant.png"):
+        assert (out / name).stat().st_size > 10_000, name
+
+
+def test_normal_compliance_1d_demo_rejects_bad_r(capsys):
+    demo = _load("normal_compliance_1d")
+    with pytest.raises(SystemExit) as exc:
+        demo.main(["--r", "0.3"])
+    assert exc.value.code == 2
+    assert "must be in (0, 1] and divide 1" in capsys.readouterr().err

@@ -1,0 +1,117 @@
+# SPDX-License-Identifier: MIT
+"""Constitutive laws σ̇ = E ε(u̇) + G(σ, ε(u)) and their time-discrete updates.
+
+Each law advances the stress at all quadrature points at once through the C++ kernels:
+
+* :class:`Elastic`: G = 0 (the update is exact and linear in ε).
+* :class:`LinearRate`: G(σ, ε) = aσ + bε (the paper's 1-D test uses a = -1, b = 10).
+* :class:`Perzyna`: G(σ, ε) = -(1/μ*) E(σ - P_K σ), P_K the projection onto the yield set K in
+  the energy norm ‖τ‖² = (Eτ, τ).
+
+``scheme="explicit"`` evaluates G at the previous step (the paper's Problem 4);
+``scheme="implicit"`` at the new one (Problem 2), which the kernels solve locally and
+differentiate exactly for the Newton tangent.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from vpcontact import kernels
+from vpcontact.errors import InputError
+
+SCHEMES = ("explicit", "implicit")
+
+
+@dataclass(frozen=True)
+class Elasticity:
+    """Isotropic elasticity tensor E of a model.
+
+    Attributes:
+        model: ``"1d"``, ``"plane_stress"``, ``"3d"`` or ``"3d_standard"`` (the last two differ
+            only in the yield set used by :class:`Perzyna`).
+        E: Young's modulus (> 0).
+        nu: Poisson's ratio in (-1, 0.5); ignored in 1-D.
+    """
+
+    model: str
+    E: float
+    nu: float = 0.0
+
+    def __post_init__(self):
+        if self.model not in kernels.MODELS:
+            raise InputError(f"unknown model {self.model!r}; expected one of {kernels.MODELS}")
+        if not (math.isfinite(self.E) and self.E > 0):
+            raise InputError(f"Young's modulus E must be finite and > 0, got {self.E}")
+        if self.model != "1d" and not -1.0 < self.nu < 0.5:
+            raise InputError(f"Poisson's ratio nu must lie in (-1, 0.5), got {self.nu}")
+
+    def matrix(self) -> np.ndarray:
+        """E as a Mandel matrix."""
+        return kernels.elasticity_matrix(self.model, E=self.E, nu=self.nu)
+
+
+def _check_scheme(scheme: str) -> None:
+    if scheme not in SCHEMES:
+        raise InputError(f"unknown time scheme {scheme!r}; expected one of {SCHEMES}")
+
+
+@dataclass(frozen=True)
+class LinearRate:
+    """G(σ, ε) = a σ + b ε, integrated with the given scheme."""
+
+    elasticity: Elasticity
+    a: float
+    b: float
+    scheme: str = "explicit"
+
+    def __post_init__(self):
+        _check_scheme(self.scheme)
+
+    @property
+    def linear_in_strain(self) -> bool:
+        """The update is affine in ε_n, so Newton needs one iteration without contact."""
+        return True
+
+    def update(self, stress_old, strain_old, strain_new, dt, stress_out, tangent_out) -> None:
+        """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout)."""
+        el = self.elasticity
+        kernels.stress_update_linear_mandel(
+            stress_old, strain_old, strain_new, dt=dt, E=el.E, nu=el.nu, a=self.a, b=self.b,
+            model=el.model, scheme=self.scheme, out=(stress_out, tangent_out))
+
+
+def Elastic(elasticity: Elasticity) -> LinearRate:
+    """Linear elasticity: G = 0."""
+    return LinearRate(elasticity, a=0.0, b=0.0, scheme="explicit")
+
+
+@dataclass(frozen=True)
+class Perzyna:
+    """Perzyna viscoplasticity G = -(1/μ*) E(σ - P_K σ) with yield stress σ_Y and viscosity μ*."""
+
+    elasticity: Elasticity
+    sigma_y: float
+    mu_star: float
+    scheme: str = "implicit"
+
+    def __post_init__(self):
+        _check_scheme(self.scheme)
+        if not self.sigma_y > 0 or math.isnan(self.sigma_y):
+            raise InputError(f"yield stress sigma_y must be > 0, got {self.sigma_y}")
+        if not (math.isfinite(self.mu_star) and self.mu_star > 0):
+            raise InputError(f"viscosity mu_star must be finite and > 0, got {self.mu_star}")
+
+    @property
+    def linear_in_strain(self) -> bool:
+        return self.scheme == "explicit"
+
+    def update(self, stress_old, strain_old, strain_new, dt, stress_out, tangent_out) -> None:
+        """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout)."""
+        el = self.elasticity
+        kernels.stress_update_mandel(
+            stress_old, strain_old, strain_new, dt=dt, E=el.E, nu=el.nu, sigma_y=self.sigma_y,
+            mu_star=self.mu_star, model=el.model, scheme=self.scheme, out=(stress_out, tangent_out))

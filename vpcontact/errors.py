@@ -1,0 +1,40 @@
+# SPDX-License-Identifier: MIT
+"""Exceptions raised by vpcontact.
+
+Library code raises these (never ``assert``) so that callers, the CLI and the tests can tell a
+bad input from a solver that did not converge.
+"""
+
+from __future__ import annotations
+
+
+class VpcontactError(Exception):
+    """Base class of all errors raised on purpose by vpcontact."""
+
+
+class InputError(VpcontactError, ValueError):
+    """A parameter, scene entry or mesh does not describe a valid problem."""
+
+
+class ConvergenceError(VpcontactError, RuntimeError):
+    """A nonlinear (SNES) or linear (KSP) solve of one time step did not converge.
+
+    Attributes:
+        reason: PETSc converged-reason name, e.g. ``"DIVERGED_MAX_IT"``.
+        iterations: Newton iterations performed.
+        time: time t_n of the step being solved.
+        step: index n of the step being solved.
+    """
+
+    def __init__(self, reason: str, iterations: int, time: float, step: int, detail: str = ""):
+        self.reason = reason
+        self.iterations = iterations
+        self.time = time
+        self.step = step
+        msg = (f"time step {step} (t = {time:.6g}) did not converge: {reason} after "
+               f"{iterations} Newton iteration(s)")
+        super().__init__(msg + (f"; {detail}" if detail else ""))
+
+
+class NonFiniteStateError(VpcontactError, FloatingPointError):
+    """The state after a step contains NaN or Inf (checked on every rank together)."""

@@ -1,0 +1,135 @@
+# SPDX-License-Identifier: MIT
+"""One time step as a PETSc SNES solve.
+
+:class:`StepSolver` assembles the residual and Jacobian of a dolfinx problem whose coefficients
+must be refreshed before every assembly (here: the quadrature-point stress and tangent, computed
+by the C++ kernels from the current iterate). It follows dolfinx's ``fem/petsc.py`` pattern:
+every solver has a rank-independent options prefix, user options pass through the PETSc options
+database, and the converged reason is checked after every solve.
+"""
+
+from __future__ import annotations
+
+import itertools
+from typing import Callable, Optional, Sequence
+
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from petsc4py import PETSc
+
+from vpcontact.errors import ConvergenceError
+
+_counter = itertools.count()
+_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
+
+DEFAULT_OPTIONS = {
+    "snes_type": "newtonls",
+    "snes_linesearch_type": "basic",
+    "snes_rtol": 1e-10,
+    "snes_atol": 1e-11,
+    "snes_stol": 0.0,
+    "snes_max_it": 50,
+    "ksp_type": "preonly",
+    "pc_type": "lu",
+}
+if PETSc.Sys.hasExternalPackage("mumps"):
+    DEFAULT_OPTIONS["pc_factor_mat_solver_type"] = "mumps"
+
+
+def reason_name(reason: int) -> str:
+    """Name of a SNES converged reason, e.g. ``DIVERGED_MAX_IT``."""
+    return _REASONS.get(reason, f"UNKNOWN({reason})")
+
+
+class StepSolver:
+    """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
+
+    Args:
+        residual: UFL form F(u; v).
+        jacobian: UFL form J(u; du, v).
+        u: the unknown; holds the initial guess before :meth:`solve` and the solution after.
+        bcs: Dirichlet conditions (homogeneous or not).
+        refresh: called after the iterate is copied into ``u`` and before assembling; updates
+            coefficients that depend on ``u`` (e.g. quadrature stresses).
+        petsc_options: options set under the prefix (override :data:`DEFAULT_OPTIONS`).
+        options_prefix: PETSc options prefix; default ``vpcontact_step_<k>_`` with ``k`` counting
+            solvers created (identical on all ranks since creation is collective).
+    """
+
+    def __init__(self, residual, jacobian, u: fem.Function, bcs: Sequence[fem.DirichletBCMetaClass],
+                 refresh: Callable[[], None], petsc_options: Optional[dict] = None,
+                 options_prefix: Optional[str] = None):
+        self.u = u
+        self.bcs = list(bcs)
+        self._refresh = refresh
+        self._F = fem.form(residual)
+        self._J = fem.form(jacobian)
+        self._b = fem_petsc.create_vector(self._F)
+        self._A = fem_petsc.create_matrix(self._J)
+        self._x = u.vector.duplicate()
+        comm = u.function_space.mesh.comm
+        self.prefix = options_prefix or f"vpcontact_step_{next(_counter)}_"
+
+        self.snes = PETSc.SNES().create(comm)
+        self.snes.setOptionsPrefix(self.prefix)
+        opts = PETSc.Options()
+        opts.prefixPush(self.prefix)
+        for key, value in {**DEFAULT_OPTIONS, **(petsc_options or {})}.items():
+            opts[key] = value
+        opts.prefixPop()
+        self.snes.setFunction(self._residual, self._b)
+        self.snes.setJacobian(self._jacobian, self._A)
+        self.snes.setFromOptions()
+        self.snes.getKSP().setFromOptions()
+        self.total_iterations = 0
+
+    def set_bounds(self, lower: PETSc.Vec, upper: PETSc.Vec) -> None:
+        """Turn the solve into a variational inequality lower ≤ u ≤ upper (SNES VI)."""
+        self.snes.setType("vinewtonrsls")
+        self.snes.setVariableBounds(lower, upper)
+
+    def _load_iterate(self, x: PETSc.Vec) -> None:
+        # SNES may evaluate at vectors other than the solution: always copy x into u first.
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        x.copy(self.u.vector)
+        self.u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        self._refresh()
+
+    def _residual(self, snes, x, b) -> None:
+        self._load_iterate(x)
+        with b.localForm() as b_local:
+            b_local.set(0.0)
+        fem_petsc.assemble_vector(b, self._F)
+        fem_petsc.apply_lifting(b, [self._J], bcs=[self.bcs], x0=[x], scale=-1.0)
+        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        fem_petsc.set_bc(b, self.bcs, x, -1.0)
+
+    def _jacobian(self, snes, x, A, P) -> None:
+        self._load_iterate(x)
+        A.zeroEntries()
+        fem_petsc.assemble_matrix(A, self._J, bcs=self.bcs)
+        A.assemble()
+
+    def solve(self, time: float, step: int) -> int:
+        """Solve from the current ``u`` as initial guess; return the Newton iteration count.
+
+        Raises:
+            ConvergenceError: SNES (or its linear solver) did not converge; ``u`` is then left at
+                the last iterate and must not be used as a result.
+        """
+        self.u.vector.copy(self._x)
+        self.snes.solve(None, self._x)
+        reason = self.snes.getConvergedReason()
+        its = self.snes.getIterationNumber()
+        self.total_iterations += its
+        self._load_iterate(self._x)
+        if reason <= 0:
+            ksp_reason = self.snes.getKSP().getConvergedReason()
+            detail = f"last linear solve reason {ksp_reason}" if ksp_reason < 0 else ""
+            raise ConvergenceError(reason_name(reason), its, time, step, detail)
+        return its
+
+    def destroy(self) -> None:
+        """Free the PETSc objects."""
+        for obj in (self.snes, self._A, self._b, self._x):
+            obj.destroy()

@@ -1,0 +1,173 @@
+# SPDX-License-Identifier: MIT
+"""The fully discrete quasistatic contact problem (the paper's Problems 2 and 4).
+
+At each time t_n find u_n ∈ V^h (u = 0 on Γ1) such that for all v ∈ V^h
+
+    (σ_n, ε(v))_Q + ⟨contact(u_n), v⟩_Γ3 = (f_0(t_n), v)_H + (f_2(t_n), v)_Γ2,
+    σ_n = σ_{n-1} + E(ε(u_n) - ε(u_{n-1})) + k G(σ_*, ε_*),
+
+where (σ_*, ε_*) is the previous step for the explicit scheme (Problem 4) and the new one for the
+implicit scheme (Problem 2). σ_n is computed at quadrature points by the C++ kernels from the
+current Newton iterate; the Jacobian uses their consistent tangent dσ_n/dε_n.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable, Dict, Optional
+
+import numpy as np
+import ufl
+from dolfinx import fem, mesh as dmesh
+from mpi4py import MPI
+
+from vpcontact.errors import InputError, NonFiniteStateError
+from vpcontact.nonlinear import StepSolver
+from vpcontact.quadrature import QuadratureState
+from vpcontact.tensors import as_mandel_matrix, as_mandel_vector, mandel_strain
+
+#: A load is a function (x, t) -> UFL expression, x the spatial coordinate, t a time Constant.
+Load = Callable[[ufl.SpatialCoordinate, fem.Constant], ufl.core.expr.Expr]
+
+
+@dataclass
+class StepReport:
+    """What one accepted time step did."""
+
+    step: int
+    time: float
+    newton_iterations: int
+
+
+@dataclass
+class Loads:
+    """Body force f_0 and surface tractions f_2 (by facet tag)."""
+
+    body_force: Optional[Load] = None
+    tractions: Dict[int, Load] = field(default_factory=dict)
+
+
+class QuasistaticProblem:
+    """Time-stepping solver for a viscoplastic body clamped on Γ1, loaded, in contact on Γ3.
+
+    Args:
+        mesh: dolfinx mesh.
+        facet_tags: meshtags on facets marking Γ1, Γ2 parts and Γ3.
+        law: constitutive law (see :mod:`vpcontact.constitutive`).
+        clamped_tag: facet tag of Γ1 (u = 0); it must mark at least one facet.
+        loads: body force and tractions.
+        contact: contact condition on Γ3 or None.
+        degree: polynomial degree of the displacement (1 = the paper's P1/P0 pairing).
+        petsc_options: options for the SNES of each step.
+        options_prefix: PETSc options prefix of that SNES.
+    """
+
+    def __init__(self, mesh, facet_tags, law, clamped_tag: int, loads: Loads = Loads(),
+                 contact=None, degree: int = 1, petsc_options: Optional[dict] = None,
+                 options_prefix: Optional[str] = None):
+        self.mesh = mesh
+        self.law = law
+        self.contact = contact
+        dim = mesh.topology.dim
+        self.V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree), dim=dim)
+        self.u = fem.Function(self.V, name="displacement")
+        self.time = fem.Constant(mesh, 0.0)
+        self.dt = 0.0
+
+        clamped = facet_tags.find(clamped_tag)
+        n_clamped = mesh.comm.allreduce(len(clamped), op=MPI.SUM)
+        if n_clamped == 0:
+            raise InputError(f"the clamped boundary (tag {clamped_tag}) has no facets: meas(Γ1) > 0 "
+                             "is required")
+        zero = np.zeros(dim, dtype=np.float64)
+        dofs = fem.locate_dofs_topological(self.V, dim - 1, clamped)
+        self.bcs = [fem.dirichletbc(zero, dofs, self.V)]
+
+        # Stress quadrature: exact for ε(v) of degree-p displacements paired with the stress.
+        self.state = QuadratureState(self.u, degree=max(2 * (degree - 1), 1))
+        v, du = ufl.TestFunction(self.V), ufl.TrialFunction(self.V)
+        n_q = self.state.size
+        dxq = self.state.measure
+        sigma = as_mandel_vector(self.state.stress, n_q)
+        tangent = as_mandel_matrix(self.state.tangent, n_q)
+        residual = ufl.dot(sigma, mandel_strain(v, dim)) * dxq
+        jacobian = ufl.dot(ufl.dot(tangent, mandel_strain(du, dim)), mandel_strain(v, dim)) * dxq
+
+        x = ufl.SpatialCoordinate(mesh)
+        ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+        if loads.body_force is not None:
+            residual -= ufl.dot(_as_vector(loads.body_force(x, self.time), dim), v) * ufl.dx
+        for tag, traction in loads.tractions.items():
+            residual -= ufl.dot(_as_vector(traction(x, self.time), dim), v) * ds(tag)
+        if contact is not None:
+            normal = ufl.FacetNormal(mesh)
+            residual += contact.residual(self.u, v, normal, ds)
+            jacobian += contact.jacobian(self.u, du, v, normal, ds)
+
+        self.solver = StepSolver(residual, jacobian, self.u, self.bcs, self._update_stress,
+                                 petsc_options, options_prefix)
+        self.step_index = 0
+        self.reports: list[StepReport] = []
+
+    def set_initial_stress(self, sigma0: Callable[[np.ndarray], np.ndarray]) -> None:
+        """σ_0 from a function of the quadrature-point coordinates (3, N) -> (N, size) Mandel."""
+        coords = self.state.point_coordinates().T
+        values = np.asarray(sigma0(coords), dtype=np.float64).reshape(self.state.num_points, -1)
+        if values.shape[1] != self.state.size:
+            raise InputError(f"initial stress must have {self.state.size} Mandel components")
+        self.state.set_stress(values)
+
+    def _update_stress(self) -> None:
+        st = self.state
+        eps = st.strain_at_points()
+        self.law.update(st.view(st.stress_old), st.view(st.strain_old), eps, self.dt,
+                        st.view(st.stress), st.view(st.tangent))
+
+    def step(self, dt: float) -> StepReport:
+        """Advance from t_{n-1} to t_n = t_{n-1} + dt; on failure the state is rolled back."""
+        if not dt > 0:
+            raise InputError(f"time step must be > 0, got {dt}")
+        t_new = float(self.time.value) + dt
+        n = self.step_index + 1
+        u_old = self.u.x.array.copy()
+        self.dt = dt
+        self.time.value = t_new
+        try:
+            its = self.solver.solve(t_new, n)
+            self._check_finite(t_new, n)
+        except Exception:
+            self.u.x.array[:] = u_old
+            self.time.value = t_new - dt
+            self.state.rollback()
+            raise
+        self.state.commit()
+        self.step_index = n
+        report = StepReport(n, t_new, its)
+        self.reports.append(report)
+        return report
+
+    def _check_finite(self, t: float, n: int) -> None:
+        local_ok = bool(np.isfinite(self.u.x.array).all() and np.isfinite(self.state.stress.x.array).all())
+        if not self.mesh.comm.allreduce(local_ok, op=MPI.LAND):
+            raise NonFiniteStateError(f"time step {n} (t = {t:.6g}) produced NaN/Inf in the state")
+
+
+def _as_vector(expr, dim: int):
+    """Accept scalar loads in 1-D."""
+    if dim == 1 and ufl.shape(expr) == ():
+        return ufl.as_vector([expr])
+    return ufl.as_vector(expr) if isinstance(expr, (list, tuple)) else expr
+
+
+def tag_facets(mesh, markers: Dict[int, Callable[[np.ndarray], np.ndarray]]):
+    """Facet meshtags from geometric predicates {tag: f(x) -> bool array} on the boundary."""
+    fdim = mesh.topology.dim - 1
+    indices, values = [], []
+    for tag, predicate in markers.items():
+        facets = dmesh.locate_entities_boundary(mesh, fdim, predicate)
+        indices.append(facets)
+        values.append(np.full(len(facets), tag, dtype=np.int32))
+    indices = np.concatenate(indices) if indices else np.zeros(0, dtype=np.int32)
+    values = np.concatenate(values) if values else np.zeros(0, dtype=np.int32)
+    order = np.argsort(indices)
+    return dmesh.meshtags(mesh, fdim, indices[order].astype(np.int32), values[order])
