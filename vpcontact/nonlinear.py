@@ -84,8 +84,11 @@ class StepSolver:
         self.total_iterations = 0
 
     def set_bounds(self, lower: PETSc.Vec, upper: PETSc.Vec) -> None:
-        """Turn the solve into a variational inequality lower ≤ u ≤ upper (SNES VI)."""
-        self.snes.setType("vinewtonrsls")
+        """Bounds lower ≤ u ≤ upper of a variational inequality (needs a ``vi*`` SNES type)."""
+        if not self.snes.getType().startswith("vi"):
+            raise ValueError(f"SNES type {self.snes.getType()!r} cannot take variable bounds; "
+                             "use vinewtonrsls or vinewtonssls")
+        self._bounds = (lower, upper)
         self.snes.setVariableBounds(lower, upper)
 
     def _load_iterate(self, x: PETSc.Vec) -> None:

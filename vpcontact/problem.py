@@ -24,6 +24,7 @@ from mpi4py import MPI
 from vpcontact.errors import InputError, NonFiniteStateError
 from vpcontact.nonlinear import StepSolver
 from vpcontact.quadrature import QuadratureState
+from vpcontact.signorini import ContactMonitor, Signorini, contact_dofs, variable_bounds
 from vpcontact.tensors import as_mandel_matrix, as_mandel_vector, mandel_strain
 
 #: A load is a function (x, t) -> UFL expression, x the spatial coordinate, t a time Constant.
@@ -99,13 +100,24 @@ class QuasistaticProblem:
             residual -= ufl.dot(_as_vector(loads.body_force(x, self.time), dim), v) * ufl.dx
         for tag, traction in loads.tractions.items():
             residual -= ufl.dot(_as_vector(traction(x, self.time), dim), v) * ds(tag)
-        if contact is not None:
+        self.equilibrium = residual  # (σ, ε(v)) - (f, v): reactions and contact forces
+        options = dict(petsc_options or {})
+        if isinstance(contact, Signorini):
+            options = {"snes_type": "vinewtonrsls", **options}
+        elif contact is not None:
             normal = ufl.FacetNormal(mesh)
             residual += contact.residual(self.u, v, normal, ds)
             jacobian += contact.jacobian(self.u, du, v, normal, ds)
 
         self.solver = StepSolver(residual, jacobian, self.u, self.bcs, self._update_stress,
-                                 petsc_options, options_prefix)
+                                 options, options_prefix)
+        self.contact_dofs = None
+        self.contact_monitor = None
+        if isinstance(contact, Signorini):
+            self.contact_dofs = contact_dofs(self.V, facet_tags, contact)
+            self.solver.set_bounds(*variable_bounds(self.u, self.contact_dofs))
+            self.contact_monitor = ContactMonitor(self.u, self.contact_dofs, self.equilibrium,
+                                                  facet_tags, contact.tag)
         self.step_index = 0
         self.reports: list[StepReport] = []
 
