@@ -27,7 +27,7 @@ DEFAULT_OPTIONS = {
     "snes_linesearch_type": "basic",
     "snes_rtol": 1e-10,
     "snes_atol": 1e-11,
-    "snes_stol": 0.0,
+    "snes_stol": 1e-11,  # a relative Newton step this small is at round-off (E ~ 1e8)
     "snes_max_it": 50,
     "ksp_type": "preonly",
     "pc_type": "lu",

@@ -133,7 +133,7 @@ class QuasistaticProblem:
         st = self.state
         eps = st.strain_at_points()
         self.law.update(st.view(st.stress_old), st.view(st.strain_old), eps, self.dt,
-                        st.view(st.stress), st.view(st.tangent))
+                        st.view(st.stress), st.tangent_view())
 
     def step(self, dt: float) -> StepReport:
         """Advance from t_{n-1} to t_n = t_{n-1} + dt; on failure the state is rolled back."""
@@ -181,5 +181,10 @@ def tag_facets(mesh, markers: Dict[int, Callable[[np.ndarray], np.ndarray]]):
         values.append(np.full(len(facets), tag, dtype=np.int32))
     indices = np.concatenate(indices) if indices else np.zeros(0, dtype=np.int32)
     values = np.concatenate(values) if values else np.zeros(0, dtype=np.int32)
+    unique, counts = np.unique(indices, return_counts=True)
+    shared = set(values[np.isin(indices, unique[counts > 1])].tolist())
+    shared = sorted(set().union(*mesh.comm.allgather(shared)))  # raise on all ranks together
+    if shared:
+        raise InputError(f"boundary parts {shared} overlap: a facet may belong to one part only")
     order = np.argsort(indices)
     return dmesh.meshtags(mesh, fdim, indices[order].astype(np.int32), values[order])

@@ -73,6 +73,10 @@ class QuadratureState:
         """Array view ``(num_points, components)`` of a quadrature Function."""
         return f.x.array.reshape(self.num_points, -1)
 
+    def tangent_view(self) -> np.ndarray:
+        """Array view ``(num_points, size, size)`` of the tangent (no copy)."""
+        return self.tangent.x.array.reshape(self.num_points, self.size, self.size)
+
     def strain_at_points(self) -> np.ndarray:
         """Evaluate ε(u) at every quadrature point of owned and ghost cells (Mandel, dof order)."""
         values = self._strain_expr.eval(self._cells).reshape(-1, self.size)

@@ -1,0 +1,183 @@
+# SPDX-License-Identifier: MIT
+"""Results for visualisation: cell-averaged stress, von Mises norm, XDMF time series.
+
+Quadrature-point stresses cannot be written to XDMF directly; they are averaged per cell with the
+rule's weights (exact for the paper's one-point P1/P0 pairing) into a DG0 tensor field.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import basix
+import numpy as np
+import ufl
+from dolfinx import fem, io
+from dolfinx import mesh as dmesh
+
+from vpcontact.quadrature import QuadratureState
+
+_SQRT2 = np.sqrt(2.0)
+
+
+def mandel_to_full(m: np.ndarray, dim: int) -> np.ndarray:
+    """(N, n) Mandel vectors -> (N, dim, dim) tensors (numpy)."""
+    out = np.empty((m.shape[0], dim, dim))
+    for i in range(dim):
+        out[:, i, i] = m[:, i]
+    pairs = {2: [(0, 1)], 3: [(1, 2), (0, 2), (0, 1)]}.get(dim, [])
+    for k, (i, j) in enumerate(pairs):
+        out[:, i, j] = out[:, j, i] = m[:, dim + k] / _SQRT2
+    return out
+
+
+def von_mises(m: np.ndarray, dim: int) -> np.ndarray:
+    """√(3/2 s:s) of Mandel stresses (plane stress in 2-D: σ33 = 0; 1-D: |σ|)."""
+    t = mandel_to_full(m, dim)
+    full = np.zeros((m.shape[0], 3, 3))
+    full[:, :dim, :dim] = t
+    dev = full - np.trace(full, axis1=1, axis2=2)[:, None, None] * np.eye(3) / 3.0
+    return np.sqrt(1.5 * np.einsum("nij,nij->n", dev, dev))
+
+
+class CellStress:
+    """DG0 fields of the cell-averaged stress tensor and its von Mises norm."""
+
+    def __init__(self, state: QuadratureState):
+        self.state = state
+        mesh = state.stress.function_space.mesh
+        dim = state.dim
+        self.stress = fem.Function(fem.TensorFunctionSpace(mesh, ("DG", 0), shape=(dim, dim)),
+                                   name="stress")
+        self.von_mises = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)), name="von_mises")
+        cell_type = basix.cell.string_to_type(mesh.ufl_cell().cellname())
+        _, weights = basix.make_quadrature(basix.QuadratureType.Default, cell_type, state.degree)
+        self._weights = weights / weights.sum()
+        num_cells = len(state._cells)
+        q_dofs = state.stress.function_space.dofmap.list.array.reshape(num_cells, -1)
+        self._q_dofs = q_dofs
+        self._dg_dofs = self.von_mises.function_space.dofmap.list.array.reshape(num_cells)
+
+    def update(self) -> None:
+        """Recompute both fields from the current quadrature stress."""
+        st = self.state
+        values = st.view(st.stress)[self._q_dofs]                 # (cells, points, n)
+        mean = np.einsum("q,cqn->cn", self._weights, values)
+        dim = st.dim
+        self.stress.x.array.reshape(-1, dim * dim)[self._dg_dofs] = \
+            mandel_to_full(mean, dim).reshape(-1, dim * dim)
+        self.von_mises.x.array[self._dg_dofs] = von_mises(mean, dim)
+
+
+class XdmfSeries:
+    """XDMF time series (for ParaView) of displacement, stress and von Mises norm."""
+
+    def __init__(self, path: str | Path, u: fem.Function, cell_stress: CellStress):
+        mesh = u.function_space.mesh
+        self.u = u
+        self.cells = cell_stress
+        self._u_out = u
+        degree = u.function_space.ufl_element().degree()
+        if degree != 1:  # XDMF needs fields of the geometry's degree
+            V1 = fem.VectorFunctionSpace(mesh, ("Lagrange", 1), dim=mesh.geometry.dim)
+            self._u_out = fem.Function(V1, name="displacement")
+        self.file = io.XDMFFile(mesh.comm, str(path), "w")
+        self.file.write_mesh(mesh)
+
+    def write(self, t: float) -> None:
+        if self._u_out is not self.u:
+            self._u_out.interpolate(self.u)
+        self.cells.update()
+        self.file.write_function(self._u_out, t)
+        self.file.write_function(self.cells.stress, t)
+        self.file.write_function(self.cells.von_mises, t)
+
+    def close(self) -> None:
+        self.file.close()
+
+
+class ContactHistory:
+    """u_ν, gap and nodal σ_ν at the Signorini contact nodes over time, gathered on rank 0."""
+
+    def __init__(self, problem):
+        if problem.contact_dofs is None:
+            raise ValueError("the problem has no Signorini contact boundary")
+        self.problem = problem
+        self.comm = problem.mesh.comm
+        cd = problem.contact_dofs
+        self.points = _gather(self.comm, cd.points)
+        self.gap = _gather(self.comm, cd.gap)
+        self.times: list[float] = []
+        self.normal_displacement: list[np.ndarray] = []
+        self.pressure: list[np.ndarray] = []
+
+    def record(self, t: float) -> None:
+        cd = self.problem.contact_dofs
+        mon = self.problem.contact_monitor
+        un = _gather(self.comm, cd.normal_displacement(self.problem.u))
+        p = _gather(self.comm, mon.nodal_forces() / mon.weights)
+        if self.comm.rank == 0:
+            self.times.append(t)
+            self.normal_displacement.append(un)
+            self.pressure.append(p)
+
+    def write_csv(self, path: str | Path) -> None:
+        """Long format: t, x, y, z, u_normal, gap, pressure (rank 0 only)."""
+        if self.comm.rank != 0:
+            return
+        with open(path, "w") as f:
+            f.write("t,x,y,z,u_normal,gap,pressure\n")
+            for t, un, p in zip(self.times, self.normal_displacement, self.pressure):
+                for (x, y, z), u_i, g_i, p_i in zip(self.points, un, self.gap, p):
+                    f.write(f"{t:.10g},{x:.10g},{y:.10g},{z:.10g},{u_i:.10e},{g_i:.10e},{p_i:.10e}\n")
+
+
+def _gather(comm, array: np.ndarray) -> np.ndarray:
+    parts = comm.gather(np.asarray(array), root=0)
+    return np.concatenate(parts) if comm.rank == 0 else np.zeros(0)
+
+
+def deformed_cells(u: fem.Function, values: fem.Function):
+    """Vertex coordinates of the deformed owned cells and a DG0 value per cell, on rank 0.
+
+    Returns (cells (N, vertices, gdim) of x + u, values (N,)) on rank 0 and (None, None) elsewhere.
+    """
+    mesh = u.function_space.mesh
+    tdim, gdim = mesh.topology.dim, mesh.geometry.dim
+    cell_type = basix.cell.string_to_type(mesh.ufl_cell().cellname())
+    ref = basix.geometry(cell_type)
+    owned = np.arange(mesh.topology.index_map(tdim).size_local, dtype=np.int32)
+    x_expr = fem.Expression(ufl.SpatialCoordinate(mesh) + u, ref)
+    coords = x_expr.eval(owned).reshape(len(owned), len(ref), gdim)
+    dg = values.function_space.dofmap.list.array.reshape(-1)[:len(owned)]
+    local_values = values.x.array[dg]
+    all_coords = _gather(mesh.comm, coords)
+    all_values = _gather(mesh.comm, local_values)
+    return (all_coords, all_values) if mesh.comm.rank == 0 else (None, None)
+
+
+def boundary_faces(u: fem.Function, values: fem.Function):
+    """Deformed exterior facets (x + u) of a 3-D mesh with their cell's DG0 value, on rank 0."""
+    mesh = u.function_space.mesh
+    tdim, gdim = mesh.topology.dim, mesh.geometry.dim
+    mesh.topology.create_connectivity(tdim - 1, tdim)
+    mesh.topology.create_connectivity(tdim, tdim - 1)
+    f2c = mesh.topology.connectivity(tdim - 1, tdim)
+    c2f = mesh.topology.connectivity(tdim, tdim - 1)
+    n_owned = mesh.topology.index_map(tdim).size_local
+    facets = dmesh.exterior_facet_indices(mesh.topology)
+    cells = np.array([f2c.links(f)[0] for f in facets], dtype=np.int32).reshape(-1)
+    keep = cells < n_owned
+    facets, cells = facets[keep], cells[keep]
+    local_facet = np.array([np.flatnonzero(c2f.links(c) == f)[0] for f, c in zip(facets, cells)],
+                           dtype=np.int32)
+    cell_type = basix.cell.string_to_type(mesh.ufl_cell().cellname())
+    ref = basix.geometry(cell_type)
+    facet_vertices = np.array(basix.topology(cell_type)[tdim - 1])   # (facets per cell, vertices)
+    x_expr = fem.Expression(ufl.SpatialCoordinate(mesh) + u, ref)
+    corners = x_expr.eval(cells).reshape(len(cells), len(ref), gdim)
+    faces = corners[np.arange(len(cells))[:, None], facet_vertices[local_facet]]
+    dg = values.function_space.dofmap.list.array.reshape(-1)
+    all_faces = _gather(mesh.comm, faces)
+    all_values = _gather(mesh.comm, values.x.array[dg[cells]])
+    return (all_faces, all_values) if mesh.comm.rank == 0 else (None, None)

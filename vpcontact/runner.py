@@ -1,0 +1,72 @@
+# SPDX-License-Identifier: MIT
+"""Time loop with outputs: XDMF series, contact history and per-step diagnostics."""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Optional
+
+from vpcontact.output import CellStress, ContactHistory, XdmfSeries
+from vpcontact.problem import QuasistaticProblem
+from vpcontact.signorini import ContactReport
+
+
+@dataclass
+class RunRecord:
+    """What a run did, step by step."""
+
+    times: list = field(default_factory=list)
+    newton_iterations: list = field(default_factory=list)
+    contact: list = field(default_factory=list)      # ContactReport per step (Signorini)
+    wall_time: float = 0.0
+
+
+def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Path] = None,
+        name: str = "result", xdmf: bool = True, verbose: bool = True) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
+    """Advance ``problem`` to ``t_final`` with steps ``dt``, writing outputs into ``out``.
+
+    Returns the run record, the contact history (Signorini problems) and the cell stress fields.
+    """
+    n_steps = int(round(t_final / dt))
+    if n_steps < 1 or abs(n_steps * dt - t_final) > 1e-9 * t_final:
+        raise ValueError(f"dt = {dt} must divide t_final = {t_final}")
+    comm = problem.mesh.comm
+    cells = CellStress(problem.state)
+    series = None
+    if out is not None and xdmf:
+        if comm.rank == 0:
+            Path(out).mkdir(parents=True, exist_ok=True)
+        comm.barrier()
+        series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells)
+    history = ContactHistory(problem) if problem.contact_dofs is not None else None
+    record = RunRecord()
+    if history is not None:
+        history.record(0.0)
+    start = _time.perf_counter()
+    try:
+        for _ in range(n_steps):
+            step = problem.step(dt)
+            record.times.append(step.time)
+            record.newton_iterations.append(step.newton_iterations)
+            report: Optional[ContactReport] = None
+            if problem.contact_monitor is not None:
+                report = problem.contact_monitor.report()
+                record.contact.append(report)
+            if history is not None:
+                history.record(step.time)
+            if series is not None:
+                series.write(step.time)
+            if verbose and comm.rank == 0:
+                active = f"  active contact dofs {report.active:4d}" if report else ""
+                print(f"step {step.step:4d}  t = {step.time:.4f}  Newton its {step.newton_iterations}"
+                      f"{active}", flush=True)
+    finally:
+        if series is not None:
+            series.close()
+    record.wall_time = _time.perf_counter() - start
+    cells.update()
+    if out is not None and history is not None:
+        history.write_csv(Path(out) / "contact_history.csv")
+    return record, history, cells
