@@ -13,6 +13,7 @@ from __future__ import annotations
 import itertools
 from typing import Callable, Optional, Sequence
 
+import numpy as np
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from petsc4py import PETSc
@@ -54,11 +55,18 @@ class StepSolver:
         petsc_options: options set under the prefix (override :data:`DEFAULT_OPTIONS`).
         options_prefix: PETSc options prefix; default ``vpcontact_step_<k>_`` with ``k`` counting
             solvers created (identical on all ranks since creation is collective).
+        scale: SNES works on x = u / scale. PETSc's VI solvers decide whether a bound is active
+            with an absolute tolerance of 1e-8 in the units of x, which is meaningless for
+            displacements of 1e-9 m (E ~ 1e8 Pa); a power-of-two scale makes that tolerance
+            negligible without any rounding. Residuals stay in physical units.
     """
 
     def __init__(self, residual, jacobian, u: fem.Function, bcs: Sequence[fem.DirichletBCMetaClass],
                  refresh: Callable[[], None], petsc_options: Optional[dict] = None,
-                 options_prefix: Optional[str] = None):
+                 options_prefix: Optional[str] = None, scale: float = 1.0):
+        if not scale > 0:
+            raise ValueError(f"scale must be > 0, got {scale}")
+        self.scale = float(scale)
         self.u = u
         self.bcs = list(bcs)
         self._refresh = refresh
@@ -84,10 +92,13 @@ class StepSolver:
         self.total_iterations = 0
 
     def set_bounds(self, lower: PETSc.Vec, upper: PETSc.Vec) -> None:
-        """Bounds lower ≤ u ≤ upper of a variational inequality (needs a ``vi*`` SNES type)."""
+        """Bounds lower ≤ u ≤ upper (physical units) of a variational inequality (SNES VI)."""
         if not self.snes.getType().startswith("vi"):
             raise ValueError(f"SNES type {self.snes.getType()!r} cannot take variable bounds; "
                              "use vinewtonrsls or vinewtonssls")
+        for vec in (lower, upper):
+            finite = np.abs(vec.array) < PETSc.INFINITY
+            vec.array[finite] /= self.scale
         self._bounds = (lower, upper)
         self.snes.setVariableBounds(lower, upper)
 
@@ -95,6 +106,8 @@ class StepSolver:
         # SNES may evaluate at vectors other than the solution: always copy x into u first.
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         x.copy(self.u.vector)
+        if self.scale != 1.0:
+            self.u.vector.scale(self.scale)
         self.u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self._refresh()
 
@@ -103,15 +116,18 @@ class StepSolver:
         with b.localForm() as b_local:
             b_local.set(0.0)
         fem_petsc.assemble_vector(b, self._F)
-        fem_petsc.apply_lifting(b, [self._J], bcs=[self.bcs], x0=[x], scale=-1.0)
+        u = self.u.vector  # physical units: b = u - g on Dirichlet rows
+        fem_petsc.apply_lifting(b, [self._J], bcs=[self.bcs], x0=[u], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        fem_petsc.set_bc(b, self.bcs, x, -1.0)
+        fem_petsc.set_bc(b, self.bcs, u, -1.0)
 
     def _jacobian(self, snes, x, A, P) -> None:
         self._load_iterate(x)
         A.zeroEntries()
         fem_petsc.assemble_matrix(A, self._J, bcs=self.bcs)
         A.assemble()
+        if self.scale != 1.0:
+            A.scale(self.scale)  # d(residual)/dx = d(residual)/du * scale
 
     def solve(self, time: float, step: int) -> int:
         """Solve from the current ``u`` as initial guess; return the Newton iteration count.
@@ -121,6 +137,8 @@ class StepSolver:
                 the last iterate and must not be used as a result.
         """
         self.u.vector.copy(self._x)
+        if self.scale != 1.0:
+            self._x.scale(1.0 / self.scale)
         self.snes.solve(None, self._x)
         reason = self.snes.getConvergedReason()
         its = self.snes.getIterationNumber()

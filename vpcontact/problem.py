@@ -109,12 +109,16 @@ class QuasistaticProblem:
             residual += contact.residual(self.u, v, normal, ds)
             jacobian += contact.jacobian(self.u, du, v, normal, ds)
 
+        # Unknown scale for SNES: an exact power of two far below any displacement of interest.
+        extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
+        scale = 2.0 ** (np.floor(np.log2(extent)) - 40)
         self.solver = StepSolver(residual, jacobian, self.u, self.bcs, self._update_stress,
-                                 options, options_prefix)
+                                 options, options_prefix, scale=scale)
         self.contact_dofs = None
         self.contact_monitor = None
         if isinstance(contact, Signorini):
-            self.contact_dofs = contact_dofs(self.V, facet_tags, contact)
+            clamped_dofs = self.bcs[0].dof_indices()[0]
+            self.contact_dofs = contact_dofs(self.V, facet_tags, contact, exclude=clamped_dofs)
             self.solver.set_bounds(*variable_bounds(self.u, self.contact_dofs))
             self.contact_monitor = ContactMonitor(self.u, self.contact_dofs, self.equilibrium,
                                                   facet_tags, contact.tag)

@@ -88,8 +88,13 @@ def planar_normal(mesh, facet_tags, tag: int, tol: float = 1e-10) -> tuple[int, 
     return axis, float(np.sign(mean[axis]))
 
 
-def contact_dofs(V: fem.FunctionSpace, facet_tags, contact: Signorini) -> ContactDofs:
-    """Locate the normal-component dofs of Γ3 and evaluate the gap there."""
+def contact_dofs(V: fem.FunctionSpace, facet_tags, contact: Signorini,
+                 exclude: np.ndarray = np.zeros(0, dtype=np.int32)) -> ContactDofs:
+    """Locate the normal-component dofs of Γ3 and evaluate the gap there.
+
+    Dofs in ``exclude`` (the Dirichlet dofs: u = 0 there already) are left out, so that clamp
+    reactions on the edge shared by Γ1 and Γ3 are not reported as contact forces.
+    """
     mesh = V.mesh
     axis, sign = planar_normal(mesh, facet_tags, contact.tag)
     sub = V.sub(axis)
@@ -97,7 +102,7 @@ def contact_dofs(V: fem.FunctionSpace, facet_tags, contact: Signorini) -> Contac
     facets = facet_tags.find(contact.tag)
     parent, child = fem.locate_dofs_topological((sub, collapsed), mesh.topology.dim - 1, facets)
     owned = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
-    keep = parent < owned
+    keep = (parent < owned) & ~np.isin(parent, exclude)
     parent, child = parent[keep], child[keep]
     points = collapsed.tabulate_dof_coordinates()[child]
     normal = np.zeros(3)
