@@ -7,4 +7,6 @@ source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 cd "$ROOT"
 "$VPCONTACT_PYTHON" -m pytest "$@"
 echo "[test] again on 2 MPI ranks (tests not marked serial)"
-mpirun -n 2 "$VPCONTACT_PYTHON" -m pytest -q -p no:cacheprovider -m "not serial" "$@"
+# each rank gets its own pytest base folder (they would race cleaning a shared one)
+mpirun -n 2 bash -c 'exec "$0" -m pytest -q -p no:cacheprovider --basetemp="/tmp/vpcontact-pytest-$(id -u)-${OMPI_COMM_WORLD_RANK:-0}" -m "not serial" "$@"' \
+  "$VPCONTACT_PYTHON" "$@"

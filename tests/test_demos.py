@@ -38,3 +38,15 @@ def test_normal_compliance_1d_demo_rejects_bad_r(capsys):
         demo.main(["--r", "0.3"])
     assert exc.value.code == 2
     assert "must be in (0, 1] and divide 1" in capsys.readouterr().err
+
+
+def test_signorini_3d_demo(shared_tmp_path, monkeypatch):
+    monkeypatch.setenv("CI", "1")
+    demo = _load("signorini_3d")
+    out = shared_tmp_path / "s3d"
+    record = demo.run(out)
+    MPI.COMM_WORLD.barrier()
+    assert record.contact[-1].active > 0 and record.contact[-1].max_penetration <= 1e-10
+    for name in ("signorini_3d.xdmf", "signorini_3d.h5", "fig3_deformed.png",
+                 "fig4_contact_evolution.png", "contact_history.csv"):
+        assert (out / name).stat().st_size > 1000, name

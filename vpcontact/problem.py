@@ -101,13 +101,18 @@ class QuasistaticProblem:
         for tag, traction in loads.tractions.items():
             residual -= ufl.dot(_as_vector(traction(x, self.time), dim), v) * ds(tag)
         self.equilibrium = residual  # (σ, ε(v)) - (f, v): reactions and contact forces
-        options = dict(petsc_options or {})
+        defaults = {}
+        if not law.linear_in_strain:
+            # Stiff elastic (E ~ 1e8) against soft viscous (μ*/k) branches: full Newton steps
+            # overshoot where points unload; the l2 line search restores convergence.
+            defaults["snes_linesearch_type"] = "l2"
         if isinstance(contact, Signorini):
-            options = {"snes_type": "vinewtonrsls", **options}
+            defaults["snes_type"] = "vinewtonrsls"
         elif contact is not None:
             normal = ufl.FacetNormal(mesh)
             residual += contact.residual(self.u, v, normal, ds)
             jacobian += contact.jacobian(self.u, du, v, normal, ds)
+        options = {**defaults, **(petsc_options or {})}
 
         # Unknown scale for SNES: an exact power of two far below any displacement of interest.
         extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
