@@ -22,16 +22,20 @@ done
 need_skbuild=0
 dpkg-query -W -f='${Status}' python3-scikit-build-core 2>/dev/null | grep -q "install ok installed" || need_skbuild=1
 if [ ${#missing[@]} -gt 0 ] || [ $need_skbuild -eq 1 ]; then
-  log "installing Debian packages: ${missing[*]} $( [ $need_skbuild -eq 1 ] && echo python3-scikit-build-core)"
+  log "installing Debian packages: ${missing[*]:-} (scikit-build-core from backports: $need_skbuild)"
   if ! grep -rqs "bookworm-backports" /etc/apt/sources.list /etc/apt/sources.list.d/; then
     echo "deb http://deb.debian.org/debian bookworm-backports main" |
       as_root tee /etc/apt/sources.list.d/vpcontact-backports.list >/dev/null
   fi
   as_root apt-get update -qq
   export DEBIAN_FRONTEND=noninteractive
-  [ ${#missing[@]} -gt 0 ] && as_root apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
-  [ $need_skbuild -eq 1 ] && as_root apt-get install -y -qq --no-install-recommends \
-    -t bookworm-backports python3-scikit-build-core >/dev/null
+  if [ ${#missing[@]} -gt 0 ]; then
+    as_root apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+  fi
+  if [ $need_skbuild -eq 1 ]; then
+    as_root apt-get install -y -qq --no-install-recommends -t bookworm-backports \
+      python3-scikit-build-core >/dev/null
+  fi
 fi
 
 if [ ! -x "$VENV/bin/python" ]; then
