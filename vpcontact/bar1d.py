@@ -20,6 +20,7 @@ from mpi4py import MPI
 
 from vpcontact.constitutive import Elasticity, LinearRate
 from vpcontact.contact import NormalCompliance
+from vpcontact.output import CellStress
 from vpcontact.problem import Loads, QuasistaticProblem, tag_facets
 
 T_FINAL = 10.0
@@ -90,23 +91,17 @@ class _ErrorForms:
         mesh = problem.mesh
         self.a, self.b, self.c = (fem.Constant(mesh, 0.0) for _ in range(3))
         x = ufl.SpatialCoordinate(mesh)[0]
-        # σ_h is piecewise constant: copy it into a DG0 function to integrate the error exactly.
-        self.sigma_h = fem.Function(fem.FunctionSpace(mesh, ("DG", 0)))
-        state = problem.state
-        dg_cells = self.sigma_h.function_space.dofmap.list.array
-        q_cells = state.stress.function_space.dofmap.list.array
-        self._copy = (dg_cells, q_cells)
-        self._state = state
+        # σ_h is piecewise constant: its DG0 copy lets the error be integrated exactly.
+        self.cells = CellStress(problem.state)
         dx = ufl.dx(metadata={"quadrature_degree": 4})
         eps_h = problem.u[0].dx(0)
         self.strain_err = fem.form((self.a + 2 * self.b * x - eps_h) ** 2 * dx)
-        self.stress_err = fem.form((self.c - 10.0 * x - self.sigma_h) ** 2 * dx)
+        self.stress_err = fem.form((self.c - 10.0 * x - self.cells.stress[0, 0]) ** 2 * dx)
         self.comm = mesh.comm
 
     def __call__(self, t: float) -> float:
         self.a.value, self.b.value, self.c.value = exact_coefficients(t)
-        dg, q = self._copy
-        self.sigma_h.x.array[dg] = self._state.stress.x.array[q]
+        self.cells.update()
         ee = self.comm.allreduce(fem.assemble_scalar(self.strain_err), op=MPI.SUM)
         es = self.comm.allreduce(fem.assemble_scalar(self.stress_err), op=MPI.SUM)
         return math.sqrt(ee) + math.sqrt(es)

@@ -53,7 +53,7 @@ class CellStress:
         cell_type = basix.cell.string_to_type(mesh.ufl_cell().cellname())
         _, weights = basix.make_quadrature(basix.QuadratureType.Default, cell_type, state.degree)
         self._weights = weights / weights.sum()
-        num_cells = len(state._cells)
+        num_cells = state.num_cells
         q_dofs = state.stress.function_space.dofmap.list.array.reshape(num_cells, -1)
         self._q_dofs = q_dofs
         self._dg_dofs = self.von_mises.function_space.dofmap.list.array.reshape(num_cells)

@@ -68,6 +68,11 @@ class QuadratureState:
         self.num_points = blocks.size
         self.strain = np.zeros((self.num_points, self.size))
 
+    @property
+    def num_cells(self) -> int:
+        """Owned plus ghost cells covered by the arrays."""
+        return len(self._cells)
+
     # Views of the Function arrays with one row per quadrature point (no copies).
     def view(self, f: fem.Function) -> np.ndarray:
         """Array view ``(num_points, components)`` of a quadrature Function."""
