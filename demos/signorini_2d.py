@@ -49,13 +49,13 @@ from vpcontact import plots, runner
 
 
 def run(out: str | Path = "output/signorini_2d", n: int | None = None, dt: float | None = None,
-        scheme: str = "implicit", degree: int = 1, xdmf: bool = True):
-    """Solve §4.1.1 on an n×n mesh with steps dt and write the outputs; return the run record."""
+        scheme: str = "implicit", degree: int = 1, xdmf: bool = True, t_final: float = paper.T_FINAL):
+    """Solve §4.1.1 on an n×n mesh with steps dt up to t_final, write the outputs; return the record."""
     ci = bool(os.environ.get("CI"))
     n = n or (12 if ci else 32)
     dt = dt or (0.1 if ci else 0.02)
     problem = paper.signorini_2d(n, scheme=scheme, degree=degree)
-    record, history, cells = runner.run(problem, paper.T_FINAL, dt, out=Path(out), name="signorini_2d",
+    record, history, cells = runner.run(problem, t_final, dt, out=Path(out), name="signorini_2d",
                                         xdmf=xdmf)
     plots.deformed_configuration(Path(out) / "fig1_deformed.png", problem.u, cells.von_mises,
                                  "2-D Signorini problem: von Mises norm at t = T")
@@ -78,12 +78,16 @@ def main(argv=None) -> int:
     parser.add_argument("--scheme", choices=["explicit", "implicit"], default="implicit")
     parser.add_argument("--degree", type=int, choices=[1, 2], default=1)
     parser.add_argument("--no-xdmf", action="store_true", help="skip the XDMF time series")
+    parser.add_argument("--t-final", type=float, default=paper.T_FINAL,
+                        help="final time (default: the paper's T = 1 s; contact starts near 1.28 s)")
     args = parser.parse_args(argv)
     if args.n is not None and args.n < 1:
         parser.error("--n must be >= 1")
-    if args.dt is not None and not 0 < args.dt <= paper.T_FINAL:
-        parser.error(f"--dt must lie in (0, {paper.T_FINAL}]")
-    run(args.out, args.n, args.dt, args.scheme, args.degree, xdmf=not args.no_xdmf)
+    if not 0 < args.t_final < 1e3:
+        parser.error("--t-final must lie in (0, 1000)")
+    if args.dt is not None and not 0 < args.dt <= args.t_final:
+        parser.error(f"--dt must lie in (0, {args.t_final}]")
+    run(args.out, args.n, args.dt, args.scheme, args.degree, xdmf=not args.no_xdmf, t_final=args.t_final)
     return 0
 
 

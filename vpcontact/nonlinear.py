@@ -29,12 +29,18 @@ DEFAULT_OPTIONS = {
     "snes_rtol": 1e-10,
     "snes_atol": 1e-11,
     "snes_stol": 1e-11,  # a relative Newton step this small is at round-off (E ~ 1e8)
+    # Round-off stops (snes_stol) also require ||F|| <= this * max(||F_0||, ||load||): a tiny
+    # step alone may just be a stalled line search.
+    "vpcontact_stall_rtol": 1e-6,
     "snes_max_it": 50,
     "ksp_type": "preonly",
     "pc_type": "lu",
 }
 if PETSc.Sys.hasExternalPackage("mumps"):
     DEFAULT_OPTIONS["pc_factor_mat_solver_type"] = "mumps"
+
+
+_SNES_REASON = PETSc.SNES.ConvergedReason
 
 
 def reason_name(reason: int) -> str:
@@ -59,11 +65,13 @@ class StepSolver:
             with an absolute tolerance of 1e-8 in the units of x, which is meaningless for
             displacements of 1e-9 m (E ~ 1e8 Pa); a power-of-two scale makes that tolerance
             negligible without any rounding. Residuals stay in physical units.
+        load: UFL form of the applied loads (f, v); its norm is the force scale of the round-off
+            stop (see :meth:`_converged`). None: the initial residual alone sets that scale.
     """
 
     def __init__(self, residual, jacobian, u: fem.Function, bcs: Sequence[fem.DirichletBCMetaClass],
                  refresh: Callable[[], None], petsc_options: Optional[dict] = None,
-                 options_prefix: Optional[str] = None, scale: float = 1.0):
+                 options_prefix: Optional[str] = None, scale: float = 1.0, load=None):
         if not scale > 0:
             raise ValueError(f"scale must be > 0, got {scale}")
         self.scale = float(scale)
@@ -73,6 +81,9 @@ class StepSolver:
         self._F = fem.form(residual)
         self._J = fem.form(jacobian)
         self._b = fem_petsc.create_vector(self._F)
+        self._load = fem.form(load) if load is not None else None
+        self._load_vec = fem_petsc.create_vector(self._load) if load is not None else None
+        self._force_scale = 0.0
         self._A = fem_petsc.create_matrix(self._J)
         self._x = u.vector.duplicate()
         comm = u.function_space.mesh.comm
@@ -84,11 +95,16 @@ class StepSolver:
         opts.prefixPush(self.prefix)
         for key, value in {**DEFAULT_OPTIONS, **(petsc_options or {})}.items():
             opts[key] = value
+        self._stall_rtol = float(opts.getReal(self.prefix + "vpcontact_stall_rtol"))
         opts.prefixPop()
+        if not 0.0 < self._stall_rtol < 1.0:
+            raise ValueError(f"vpcontact_stall_rtol must be in (0, 1), got {self._stall_rtol}")
         self.snes.setFunction(self._residual, self._b)
         self.snes.setJacobian(self._jacobian, self._A)
         self.snes.setFromOptions()
         self.snes.getKSP().setFromOptions()
+        self.snes.setConvergenceTest(self._converged)
+        self._fnorm0 = 0.0
         self.total_iterations = 0
 
     def set_bounds(self, lower: PETSc.Vec, upper: PETSc.Vec) -> None:
@@ -101,6 +117,31 @@ class StepSolver:
             vec.array[finite] /= self.scale
         self._bounds = (lower, upper)
         self.snes.setVariableBounds(lower, upper)
+
+    def _converged(self, snes, it: int, norms) -> int:
+        """PETSc's default test, applied to VI solvers too (their own test ignores snes_stol).
+
+        Converged when ||F|| <= atol, or ||F|| <= rtol ||F_0||, or when the step is round-off
+        relative to the solution (||dx|| <= stol ||x||) while ||F|| <= stall_rtol max(||F_0||,
+        ||load||): with E ~ 1e8 and accumulated strains ~ 1e-2 the residual cannot drop below
+        ~ eps E |ε| however small the step's load increment (and so ||F_0||) is.
+        """
+        xnorm, ynorm, fnorm = norms
+        rtol, atol, stol, _ = snes.getTolerances()
+        if not np.isfinite(fnorm):
+            return _SNES_REASON.DIVERGED_FNORM_NAN
+        if it == 0:
+            self._fnorm0 = fnorm
+        if fnorm <= atol:
+            return _SNES_REASON.CONVERGED_FNORM_ABS
+        if it == 0:
+            return _SNES_REASON.ITERATING
+        if fnorm <= rtol * self._fnorm0:
+            return _SNES_REASON.CONVERGED_FNORM_RELATIVE
+        if ynorm <= stol * xnorm and fnorm <= self._stall_rtol * max(self._fnorm0,
+                                                                      self._force_scale):
+            return _SNES_REASON.CONVERGED_SNORM_RELATIVE
+        return _SNES_REASON.ITERATING
 
     def _load_iterate(self, x: PETSc.Vec) -> None:
         # SNES may evaluate at vectors other than the solution: always copy x into u first.
@@ -136,6 +177,14 @@ class StepSolver:
             ConvergenceError: SNES (or its linear solver) did not converge; ``u`` is then left at
                 the last iterate and must not be used as a result.
         """
+        self._force_scale = 0.0
+        if self._load is not None:
+            with self._load_vec.localForm() as local:
+                local.set(0.0)
+            fem_petsc.assemble_vector(self._load_vec, self._load)
+            self._load_vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            fem_petsc.set_bc(self._load_vec, self.bcs, scale=0.0)
+            self._force_scale = self._load_vec.norm()
         self.u.vector.copy(self._x)
         if self.scale != 1.0:
             self._x.scale(1.0 / self.scale)
@@ -152,5 +201,6 @@ class StepSolver:
 
     def destroy(self) -> None:
         """Free the PETSc objects."""
-        for obj in (self.snes, self._A, self._b, self._x):
-            obj.destroy()
+        for obj in (self.snes, self._A, self._b, self._x, self._load_vec):
+            if obj is not None:
+                obj.destroy()

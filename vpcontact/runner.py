@@ -11,6 +11,7 @@ from typing import Optional
 from vpcontact.output import CellStress, ContactHistory, XdmfSeries
 from vpcontact.problem import QuasistaticProblem
 from vpcontact.signorini import ContactReport
+from vpcontact.stepping import StepControl, advance
 
 
 @dataclass
@@ -20,25 +21,31 @@ class RunRecord:
     times: list = field(default_factory=list)
     newton_iterations: list = field(default_factory=list)
     contact: list = field(default_factory=list)      # ContactReport per step (Signorini)
+    cuts: list = field(default_factory=list)         # stepping.Cut per rejected step
+    completed: bool = False                          # reached t_final
     wall_time: float = 0.0
 
 
 def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Path] = None,
-        name: str = "result", xdmf: bool = True, verbose: bool = True) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
-    """Advance ``problem`` to ``t_final`` with steps ``dt``, writing outputs into ``out``.
+        name: str = "result", xdmf: bool = True, verbose: bool = True,
+        max_cuts: int = 12) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
+    """Advance ``problem`` to ``t_final`` with steps of at most ``dt``, writing outputs into ``out``.
+
+    A step that does not converge is rejected and retried with half the step, at most
+    ``max_cuts`` times in a row (see :mod:`vpcontact.stepping`). If it still fails, the outputs of
+    the accepted steps are written, ``record.completed`` stays False and the error is re-raised.
 
     Returns the run record, the contact history (Signorini problems) and the cell stress fields.
     """
-    n_steps = int(round(t_final / dt))
-    if n_steps < 1 or abs(n_steps * dt - t_final) > 1e-9 * t_final:
-        raise ValueError(f"dt = {dt} must divide t_final = {t_final}")
+    control = StepControl(dt, max_cuts=max_cuts)
     comm = problem.mesh.comm
     cells = CellStress(problem.state)
     series = None
-    if out is not None and xdmf:
+    if out is not None:
         if comm.rank == 0:
             Path(out).mkdir(parents=True, exist_ok=True)
         comm.barrier()
+    if out is not None and xdmf:
         series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells)
     history = ContactHistory(problem) if problem.contact_dofs is not None else None
     record = RunRecord()
@@ -46,8 +53,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         history.record(0.0)
     start = _time.perf_counter()
     try:
-        for _ in range(n_steps):
-            step = problem.step(dt)
+        for step in advance(problem, t_final, control):
             record.times.append(step.time)
             record.newton_iterations.append(step.newton_iterations)
             report: Optional[ContactReport] = None
@@ -62,11 +68,13 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                 active = f"  active contact dofs {report.active:4d}" if report else ""
                 print(f"step {step.step:4d}  t = {step.time:.4f}  Newton its {step.newton_iterations}"
                       f"{active}", flush=True)
+        record.completed = True
     finally:
+        record.cuts = list(control.cuts)
         if series is not None:
             series.close()
-    record.wall_time = _time.perf_counter() - start
-    cells.update()
-    if out is not None and history is not None:
-        history.write_csv(Path(out) / "contact_history.csv")
+        record.wall_time = _time.perf_counter() - start
+        cells.update()
+        if out is not None and history is not None:
+            history.write_csv(Path(out) / "contact_history.csv")
     return record, history, cells
