@@ -50,3 +50,19 @@ def test_signorini_3d_demo(shared_tmp_path, monkeypatch):
     for name in ("signorini_3d.xdmf", "signorini_3d.h5", "fig3_deformed.png",
                  "fig4_contact_evolution.png", "contact_history.csv"):
         assert (out / name).stat().st_size > 1000, name
+
+
+def test_signorini_2d_demo(shared_tmp_path, monkeypatch):
+    # The paper's T = 1 s: the square flows past its limit load (t ≈ 0.38 s) but is still
+    # above the obstacle (the smallest gap is 6.7 mm at x1 = 1).
+    monkeypatch.setenv("CI", "1")
+    demo = _load("signorini_2d")
+    out = shared_tmp_path / "s2d"
+    record = demo.run(out)
+    MPI.COMM_WORLD.barrier()
+    assert record.completed and abs(record.times[-1] - 1.0) < 1e-12
+    last = record.contact[-1]
+    assert last.active == 0 and -6.7e-3 < last.max_penetration < -1e-3, last
+    for name in ("signorini_2d.xdmf", "signorini_2d.h5", "fig1_deformed.png",
+                 "fig2_contact_evolution.png", "contact_history.csv"):
+        assert (out / name).stat().st_size > 1000, name

@@ -1,0 +1,75 @@
+# SPDX-License-Identifier: MIT
+"""`mpirun -n 2` gives the serial contact history (to solver tolerance), launched from the tests."""
+
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+
+from vpcontact import paper_signorini as paper
+from vpcontact import runner
+
+pytestmark = [pytest.mark.serial, pytest.mark.mpi]
+
+_SCRIPT = textwrap.dedent("""
+    import logging, sys
+    logging.getLogger().setLevel(logging.WARNING)
+    from vpcontact import paper_signorini as paper, runner
+    problem = paper.signorini_3d(9, 3, 3)
+    record, _, _ = runner.run(problem, 1.0, 0.25, out=sys.argv[1], xdmf=False, verbose=False)
+    if problem.mesh.comm.rank == 0:
+        print("ITERATIONS", *record.newton_iterations)
+""")
+
+
+def _history(path):
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    order = np.lexsort((data["z"], data["y"], data["x"], data["t"]))
+    return data[order]
+
+
+def _clean_environment():
+    # The test process itself is an MPI singleton; its Open MPI/PMIx variables must not leak
+    # into the child mpirun.
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
+    for key in ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"):
+        if key in os.environ:
+            env[key] = os.environ[key]
+    env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
+    return env
+
+
+def test_two_ranks_reproduce_the_serial_contact_history(tmp_path):
+    mpirun = shutil.which("mpirun")
+    assert mpirun is not None, "mpirun (Open MPI) is required; run scripts/setup.sh"
+    script = tmp_path / "run.py"
+    script.write_text(_SCRIPT)
+    parallel_out = tmp_path / "parallel"
+    root = ["--allow-run-as-root"] if os.geteuid() == 0 else []  # containers often run as root
+    done = subprocess.run([mpirun, *root, "-n", "2", sys.executable, str(script), str(parallel_out)],
+                          capture_output=True, text=True, timeout=600, env=_clean_environment())
+    assert done.returncode == 0, done.stderr[-3000:]
+    parallel_its = [int(v) for v in done.stdout.split("ITERATIONS")[1].split()]
+
+    serial_out = tmp_path / "serial"
+    record, _, _ = runner.run(paper.signorini_3d(9, 3, 3), 1.0, 0.25, out=serial_out, xdmf=False,
+                              verbose=False)
+    serial = _history(serial_out / "contact_history.csv")
+    parallel = _history(parallel_out / "contact_history.csv")
+
+    assert serial.shape == parallel.shape
+    for column in ("t", "x", "y", "z", "gap"):
+        np.testing.assert_allclose(parallel[column], serial[column], rtol=0, atol=1e-12)
+    scale_u = np.abs(serial["u_normal"]).max()
+    scale_p = np.abs(serial["pressure"]).max()
+    assert scale_u > 0 and scale_p > 0
+    np.testing.assert_allclose(parallel["u_normal"], serial["u_normal"], rtol=0, atol=1e-8 * scale_u)
+    np.testing.assert_allclose(parallel["pressure"], serial["pressure"], rtol=0, atol=1e-6 * scale_p)
+    # Same active sets: exactly the same contact nodes carry pressure.
+    assert np.array_equal(parallel["pressure"] < -1e-6 * scale_p, serial["pressure"] < -1e-6 * scale_p)
+    assert abs(sum(parallel_its) - sum(record.newton_iterations)) <= 2, (parallel_its,
+                                                                        record.newton_iterations)
