@@ -22,8 +22,9 @@ step: the C++ kernel solves the local Perzyna update exactly and returns its con
 The Signorini condition u_ν ≤ g is imposed by PETSc SNES VI (vinewtonrsls) as bounds on the
 vertical displacement of the Γ3 nodes. Each Newton iteration starts from the last step's
 displacement increment extrapolated in time; at the limit load, where Newton can still diverge,
-the step is rejected and retried with half the step size (then grown back). The implicit scheme is the default because with these data
-E/μ* = 5e5 s⁻¹: the explicit scheme (Problem 4) is stable only for k below about 4e-6 s.
+the step is rejected and retried with half the step size (then grown back). The implicit
+scheme is the default because with these data E/μ* = 5e5 s⁻¹: the explicit scheme (Problem 4)
+is stable only for k below about 4e-6 s.
 
 ## What it writes (into the folder printed at the end)
 * ``signorini_2d.xdmf``/``.h5``: u, cell stress, von Mises norm at every step (open in ParaView).

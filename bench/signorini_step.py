@@ -1,0 +1,115 @@
+# SPDX-License-Identifier: MIT
+"""Benchmark: cost of one viscoplastic Signorini step (paper §4.1.2, 3-D) against an elastic solve.
+
+Targets (issue "[2 of 5]"): on average at most 4 Newton iterations per step when warm-started from
+the previous step, and one step at most 3x one plain dolfinx linear-elastic solve (assembly +
+solve, same mesh, same LU). Records the per-step split: kernel (strain evaluation + C++ stress
+update), residual assembly, Jacobian assembly, and the rest of the SNES solve (linear solves and
+VI active-set work).
+
+    .venv/bin/python bench/signorini_step.py [--n 8] [--dt 0.05] [--t-final 1.0]
+
+writes bench/results/signorini_step.json (and prints it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import platform
+import sys
+import time
+from pathlib import Path
+
+import dolfinx
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from vpcontact import paper_signorini as paper
+from vpcontact.nonlinear import DEFAULT_OPTIONS
+from vpcontact.stepping import StepControl, advance
+
+
+def elastic_solve_time(V, repeats: int = 3) -> float:
+    """Seconds per plain dolfinx LinearProblem solve (assemble A and b, LU solve) on V's mesh."""
+    mesh = V.mesh
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    E, nu = paper.YOUNG, paper.POISSON
+    eps = ufl.sym(ufl.grad(u))
+    sigma = E * nu / ((1 + nu) * (1 - 2 * nu)) * ufl.tr(eps) * ufl.Identity(3) + E / (1 + nu) * eps
+    facets = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[0], 3.0))
+    tags = dolfinx.mesh.meshtags(mesh, 2, facets, np.full(len(facets), 1, dtype=np.int32))
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags)
+    L = ufl.dot(ufl.as_vector([0.0, 0.0, -10.0]), v) * ds(1)
+    clamp = fem.locate_dofs_geometrical(V, lambda x: np.isclose(x[0], 0.0))
+    bc = fem.dirichletbc(np.zeros(3), clamp, V)
+    options = {k: v for k, v in DEFAULT_OPTIONS.items() if k.startswith(("ksp_", "pc_"))}
+    problem = fem_petsc.LinearProblem(ufl.inner(sigma, ufl.sym(ufl.grad(v))) * ufl.dx, L, bcs=[bc],
+                                      petsc_options=options)
+    problem.solve()  # JIT and symbolic set-up outside the timing
+    mesh.comm.barrier()
+    start = time.perf_counter()
+    for _ in range(repeats):
+        problem.solve()
+    return (time.perf_counter() - start) / repeats
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, default=8, help="cells across the beam (mesh 3n × n × n)")
+    parser.add_argument("--dt", type=float, default=0.05)
+    parser.add_argument("--t-final", type=float, default=1.0)
+    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "signorini_step.json"))
+    args = parser.parse_args(argv)
+    comm = MPI.COMM_WORLD
+
+    problem = paper.signorini_3d(3 * args.n, args.n, args.n)
+    V = problem.V
+    dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+    elastic = elastic_solve_time(V)
+
+    problem.solver.timings.update({k: 0.0 for k in problem.solver.timings})
+    start = time.perf_counter()
+    reports = list(advance(problem, args.t_final, StepControl(args.dt)))
+    wall = time.perf_counter() - start
+    steps = len(reports)
+    its = [r.newton_iterations for r in reports]
+    t = problem.solver.timings
+    split = {"kernel": t["kernel"] / steps, "residual_assembly": t["residual"] / steps,
+             "jacobian_assembly": t["jacobian"] / steps,
+             "linear_solve_and_vi": (t["snes"] - t["kernel"] - t["residual"] - t["jacobian"]) / steps,
+             "other": (wall - t["snes"]) / steps}
+    step_time = wall / steps
+    result = {
+        "benchmark": "signorini_step",
+        "machine": {"platform": platform.platform(), "processor": platform.processor(),
+                    "python": sys.version.split()[0], "dolfinx": dolfinx.__version__,
+                    "petsc": ".".join(map(str, PETSc.Sys.getVersion())), "mpi_ranks": comm.size},
+        "problem": {"case": "paper 4.1.2 (3-D Signorini, implicit Perzyna)",
+                    "mesh": [3 * args.n, args.n, args.n], "dofs": dofs, "dt": args.dt,
+                    "t_final": args.t_final, "linear_solver": "LU (" + DEFAULT_OPTIONS.get(
+                        "pc_factor_mat_solver_type", "petsc") + ")"},
+        "steps": steps, "cuts": 0, "newton_iterations": its,
+        "newton_iterations_per_step": float(np.mean(its)),
+        "seconds_per_step": step_time, "seconds_per_step_split": split,
+        "seconds_per_elastic_solve": elastic,
+        "step_over_elastic_solve": step_time / elastic,
+        "targets": {"newton_iterations_per_step <= 4": bool(np.mean(its) <= 4),
+                    "step_over_elastic_solve <= 3": bool(step_time / elastic <= 3)},
+    }
+    if comm.rank == 0:
+        out = Path(args.out)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(json.dumps(result, indent=2) + "\n")
+        print(json.dumps(result, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    logging.getLogger().setLevel(logging.WARNING)
+    sys.exit(main())
