@@ -63,7 +63,8 @@ def run(out: str | Path = "output/signorini_3d", n: int | None = None, dt: float
         last = record.contact[-1]
         print(f"t = T: {last.active} contact nodes active, max penetration {last.max_penetration:.2e} m, "
               f"contact force {last.normal_force:.4g} N; {sum(record.newton_iterations)} Newton "
-              f"iterations in {len(record.times)} steps, {record.wall_time:.1f} s "
+              f"iterations in {len(record.times)} steps ({len(record.cuts)} rejected and retried with half "
+              f"the step), {record.wall_time:.1f} s "
               f"on {MPI.COMM_WORLD.size} rank(s)")
         print(f"outputs written to {Path(out).resolve()}")
     return record

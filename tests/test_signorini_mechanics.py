@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 import ufl
 from dolfinx import fem
+from dolfinx import mesh as dmesh
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -120,7 +121,6 @@ def test_elastic_limit_with_contact_equals_separate_vi_solve():
     mesh = V.mesh
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
     facets = mesh.topology.dim - 1
-    from dolfinx import mesh as dmesh
     end = dmesh.locate_entities_boundary(mesh, facets, lambda x: np.isclose(x[0], 3.0))
     tags = dmesh.meshtags(mesh, facets, end, np.full(len(end), 7, dtype=np.int32))
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=tags)
