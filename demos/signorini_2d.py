@@ -67,13 +67,7 @@ def run(out: str | Path = "output/signorini_2d", n: int | None = None, dt: float
                                  "2-D Signorini problem: von Mises norm at t = T")
     plots.contact_evolution(Path(out) / "fig2_contact_evolution.png", history, axis=0,
                             title="2-D Signorini problem: vertical displacement of the contact nodes")
-    if MPI.COMM_WORLD.rank == 0:
-        last = record.contact[-1]
-        print(f"t = T: {last.active} contact nodes active, max penetration {last.max_penetration:.2e} m, "
-              f"contact force {last.normal_force:.4g} N/m; {sum(record.newton_iterations)} Newton "
-              f"iterations in {len(record.times)} steps ({len(record.cuts)} rejected and retried with half "
-              f"the step), {record.wall_time:.1f} s")
-        print(f"outputs written to {Path(out).resolve()}")
+    runner.print_summary(record, Path(out), MPI.COMM_WORLD, force_unit="N/m")
     return record
 
 

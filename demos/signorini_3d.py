@@ -59,14 +59,7 @@ def run(out: str | Path = "output/signorini_3d", n: int | None = None, dt: float
     plots.contact_evolution(Path(out) / "fig4_contact_evolution.png", history, axis=0, line=(1, 0.5),
                             obstacle=False,
                             title="3-D Signorini problem: u3 of the contact nodes on x2 = 0.5")
-    if MPI.COMM_WORLD.rank == 0:
-        last = record.contact[-1]
-        print(f"t = T: {last.active} contact nodes active, max penetration {last.max_penetration:.2e} m, "
-              f"contact force {last.normal_force:.4g} N; {sum(record.newton_iterations)} Newton "
-              f"iterations in {len(record.times)} steps ({len(record.cuts)} rejected and retried with half "
-              f"the step), {record.wall_time:.1f} s "
-              f"on {MPI.COMM_WORLD.size} rank(s)")
-        print(f"outputs written to {Path(out).resolve()}")
+    runner.print_summary(record, Path(out), MPI.COMM_WORLD, force_unit="N")
     return record
 
 

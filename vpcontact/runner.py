@@ -78,3 +78,19 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         if out is not None and history is not None:
             history.write_csv(Path(out) / "contact_history.csv")
     return record, history, cells
+
+
+def print_summary(record: RunRecord, out: Path, comm, force_unit: str = "N") -> None:
+    """One paragraph on rank 0: final contact state, Newton effort, rejected steps, wall time."""
+    if comm.rank != 0:
+        return
+    last = f"t = {record.times[-1]:.4g}" if record.times else "no step"
+    contact = ""
+    if record.contact:
+        c = record.contact[-1]
+        contact = (f"{c.active} contact nodes active, max penetration {c.max_penetration:.2e} m, "
+                   f"contact force {c.normal_force:.4g} {force_unit}; ")
+    print(f"{last}: {contact}{sum(record.newton_iterations)} Newton iterations in "
+          f"{len(record.times)} steps ({len(record.cuts)} rejected and retried with half the step), "
+          f"{record.wall_time:.1f} s on {comm.size} rank(s)")
+    print(f"outputs written to {Path(out).resolve()}")
