@@ -33,6 +33,9 @@ DEFAULT_OPTIONS = {
     # Round-off stops (snes_stol) also require ||F|| <= this * max(||F_0||, ||load||): a tiny
     # step alone may just be a stalled line search.
     "vpcontact_stall_rtol": 1e-6,
+    # Also converged when ||F|| <= this * ||load||: the residual is then a force imbalance this
+    # small relative to the applied loads (0 disables the test).
+    "vpcontact_force_rtol": 0.0,
     "snes_max_it": 50,
     "ksp_type": "preonly",
     "pc_type": "lu",
@@ -97,7 +100,10 @@ class StepSolver:
         for key, value in {**DEFAULT_OPTIONS, **(petsc_options or {})}.items():
             opts[key] = value
         self._stall_rtol = float(opts.getReal(self.prefix + "vpcontact_stall_rtol"))
+        self._force_rtol = float(opts.getReal(self.prefix + "vpcontact_force_rtol"))
         opts.prefixPop()
+        if not 0.0 <= self._force_rtol < 1.0:
+            raise ValueError(f"vpcontact_force_rtol must be in [0, 1), got {self._force_rtol}")
         if not 0.0 < self._stall_rtol < 1.0:
             raise ValueError(f"vpcontact_stall_rtol must be in (0, 1), got {self._stall_rtol}")
         self.snes.setFunction(self._residual, self._b)
@@ -138,7 +144,7 @@ class StepSolver:
             return _SNES_REASON.DIVERGED_FNORM_NAN
         if it == 0:
             self._fnorm0 = fnorm
-        if fnorm <= atol:
+        if fnorm <= atol or fnorm <= self._force_rtol * self._force_scale:
             return _SNES_REASON.CONVERGED_FNORM_ABS
         if it == 0:
             return _SNES_REASON.ITERATING
