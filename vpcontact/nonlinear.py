@@ -17,6 +17,7 @@ from typing import Callable, Optional, Sequence
 import numpy as np
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.errors import ConvergenceError
@@ -71,11 +72,18 @@ class StepSolver:
             negligible without any rounding. Residuals stay in physical units.
         load: UFL form of the applied loads (f, v); its norm is the force scale of the round-off
             stop (see :meth:`_converged`). None: the initial residual alone sets that scale.
+        point_forces: called at each residual evaluation; returns (dofs, values): nodal forces
+            to add to the applied loads at local dof indices this rank owns.
+        constant_jacobian: the Jacobian depends on the step size only (a constitutive update
+            linear in ε and no nonlinear contact term): it is assembled once per step size and
+            the linear solver's factorization is reused across iterations and steps.
     """
 
     def __init__(self, residual, jacobian, u: fem.Function, bcs: Sequence[fem.DirichletBCMetaClass],
                  refresh: Callable[[], None], petsc_options: Optional[dict] = None,
-                 options_prefix: Optional[str] = None, scale: float = 1.0, load=None):
+                 options_prefix: Optional[str] = None, scale: float = 1.0, load=None,
+                 point_forces: Optional[Callable[[], tuple]] = None,
+                 constant_jacobian: bool = False):
         if not scale > 0:
             raise ValueError(f"scale must be > 0, got {scale}")
         self.scale = float(scale)
@@ -86,8 +94,13 @@ class StepSolver:
         self._J = fem.form(jacobian)
         self._b = fem_petsc.create_vector(self._F)
         self._load = fem.form(load) if load is not None else None
-        self._load_vec = fem_petsc.create_vector(self._load) if load is not None else None
+        self._load_vec = (fem_petsc.create_vector(self._F)
+                          if load is not None or point_forces is not None else None)
         self._force_scale = 0.0
+        self._point_forces = point_forces
+        self.constant_jacobian = constant_jacobian
+        self._jacobian_dt: Optional[float] = None  # step size of the assembled constant Jacobian
+        self.dt = 0.0  # set by the owner before each solve (only the constant-Jacobian reuse reads it)
         self._A = fem_petsc.create_matrix(self._J)
         self._x = u.vector.duplicate()
         comm = u.function_space.mesh.comm
@@ -106,21 +119,33 @@ class StepSolver:
             raise ValueError(f"vpcontact_force_rtol must be in [0, 1), got {self._force_rtol}")
         if not 0.0 < self._stall_rtol < 1.0:
             raise ValueError(f"vpcontact_stall_rtol must be in (0, 1), got {self._stall_rtol}")
-        self.snes.setFunction(self._residual, self._b)
-        self.snes.setJacobian(self._jacobian, self._A)
-        self.snes.setFromOptions()
-        self.snes.getKSP().setFromOptions()
-        self.snes.setConvergenceTest(self._converged)
+        self._setup(self.snes)
+        self._free_snes: Optional[PETSc.SNES] = None  # unconstrained Newton of a VI problem
+        self._bounds = None
         self._fnorm0 = 0.0
         self._loaded = self._x.duplicate()  # the iterate whose refresh is current
         self._loaded_valid = False
         self.total_iterations = 0
+        self.jacobian_assemblies = 0
+        self.kernel_calls = 0
         #: wall time [s] spent in the refresh hook (kernels), residual and Jacobian assembly,
         #: and in SNES solves altogether (the rest of which is linear solves and VI work)
         self.timings = {"kernel": 0.0, "residual": 0.0, "jacobian": 0.0, "snes": 0.0}
 
+    def _setup(self, snes: PETSc.SNES) -> None:
+        snes.setFunction(self._residual, self._b)
+        snes.setJacobian(self._jacobian, self._A)
+        snes.setFromOptions()
+        snes.getKSP().setFromOptions()
+        snes.setConvergenceTest(self._converged)
+
     def set_bounds(self, lower: PETSc.Vec, upper: PETSc.Vec) -> None:
-        """Bounds lower ≤ u ≤ upper (physical units) of a variational inequality (SNES VI)."""
+        """Bounds lower ≤ u ≤ upper (physical units) of a variational inequality (SNES VI).
+
+        Also creates a plain Newton solver for the same equations under the same options:
+        :meth:`solve` with ``try_unconstrained=True`` runs it first and keeps its solution when
+        that satisfies the bounds (then it solves the VI too, with no active constraint).
+        """
         if not self.snes.getType().startswith("vi"):
             raise ValueError(f"SNES type {self.snes.getType()!r} cannot take variable bounds; "
                              "use vinewtonrsls or vinewtonssls")
@@ -129,6 +154,16 @@ class StepSolver:
             vec.array[finite] /= self.scale
         self._bounds = (lower, upper)
         self.snes.setVariableBounds(lower, upper)
+        self._free_snes = PETSc.SNES().create(self.u.function_space.mesh.comm)
+        self._free_snes.setOptionsPrefix(self.prefix)
+        self._setup(self._free_snes)
+        self._free_snes.setType("newtonls")
+
+    def _feasible(self, x: PETSc.Vec) -> bool:
+        """x within the bounds (to 1e-6 in units of x, i.e. round-off in physical units)."""
+        lower, upper = self._bounds
+        ok = bool(np.all(x.array <= upper.array + 1e-6) and np.all(x.array >= lower.array - 1e-6))
+        return self.u.function_space.mesh.comm.allreduce(ok, op=MPI.LAND)
 
     def _converged(self, snes, it: int, norms) -> int:
         """PETSc's default test, applied to VI solvers too (their own test ignores snes_stol).
@@ -168,6 +203,7 @@ class StepSolver:
             self.u.vector.scale(self.scale)
         self.u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         self._refresh()
+        self.kernel_calls += 1
         x.copy(self._loaded)
         self._loaded_valid = True
         self.timings["kernel"] += _time.perf_counter() - start
@@ -181,10 +217,15 @@ class StepSolver:
         u = self.u.vector  # physical units: b = u - g on Dirichlet rows
         fem_petsc.apply_lifting(b, [self._J], bcs=[self.bcs], x0=[u], scale=-1.0)
         b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self._point_forces is not None:
+            dofs, values = self._point_forces()
+            b.array[dofs] -= values
         fem_petsc.set_bc(b, self.bcs, u, -1.0)
         self.timings["residual"] += _time.perf_counter() - start
 
     def _jacobian(self, snes, x, A, P) -> None:
+        if self.constant_jacobian and self._jacobian_dt == self.dt:
+            return  # A unchanged: the preconditioner (factorization) is reused as it is
         self._load_iterate(x)
         start = _time.perf_counter()
         A.zeroEntries()
@@ -192,42 +233,68 @@ class StepSolver:
         A.assemble()
         if self.scale != 1.0:
             A.scale(self.scale)  # d(residual)/dx = d(residual)/du * scale
+        self._jacobian_dt = self.dt
+        self.jacobian_assemblies += 1
         self.timings["jacobian"] += _time.perf_counter() - start
 
-    def solve(self, time: float, step: int) -> int:
+    def solve(self, time: float, step: int, try_unconstrained: bool = False) -> int:
         """Solve from the current ``u`` as initial guess; return the Newton iteration count.
+
+        With bounds and ``try_unconstrained``, plain Newton runs first; its solution is kept when
+        it converged within the bounds, otherwise the VI is solved from the initial guess.
 
         Raises:
             ConvergenceError: SNES (or its linear solver) did not converge; ``u`` is then left at
                 the last iterate and must not be used as a result.
         """
         self._force_scale = 0.0
-        if self._load is not None:
+        if self._load_vec is not None:
             with self._load_vec.localForm() as local:
                 local.set(0.0)
-            fem_petsc.assemble_vector(self._load_vec, self._load)
+            if self._load is not None:
+                fem_petsc.assemble_vector(self._load_vec, self._load)
             self._load_vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+            if self._point_forces is not None:
+                dofs, values = self._point_forces()
+                self._load_vec.array[dofs] += values
             fem_petsc.set_bc(self._load_vec, self.bcs, scale=0.0)
             self._force_scale = self._load_vec.norm()
         self.u.vector.copy(self._x)
         if self.scale != 1.0:
             self._x.scale(1.0 / self.scale)
         self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
-        start = _time.perf_counter()
-        self.snes.solve(None, self._x)
-        self.timings["snes"] += _time.perf_counter() - start
-        reason = self.snes.getConvergedReason()
-        its = self.snes.getIterationNumber()
-        self.total_iterations += its
+        its = 0
+        snes = self.snes
+        if try_unconstrained and self._free_snes is not None:
+            guess = self._x.copy()
+            reason, free_its = self._run(self._free_snes)
+            its += free_its
+            if reason > 0 and self._feasible(self._x):
+                snes = self._free_snes
+            else:
+                guess.copy(self._x)
+            guess.destroy()
+        if snes is self.snes:
+            reason, more = self._run(self.snes)
+            its += more
         self._load_iterate(self._x)
         if reason <= 0:
-            ksp_reason = self.snes.getKSP().getConvergedReason()
+            ksp_reason = snes.getKSP().getConvergedReason()
             detail = f"last linear solve reason {ksp_reason}" if ksp_reason < 0 else ""
             raise ConvergenceError(reason_name(reason), its, time, step, detail)
         return its
 
+    def _run(self, snes: PETSc.SNES) -> tuple[int, int]:
+        """One SNES solve from self._x: (converged reason, iterations)."""
+        start = _time.perf_counter()
+        snes.solve(None, self._x)
+        self.timings["snes"] += _time.perf_counter() - start
+        its = snes.getIterationNumber()
+        self.total_iterations += its
+        return snes.getConvergedReason(), its
+
     def destroy(self) -> None:
         """Free the PETSc objects."""
-        for obj in (self.snes, self._A, self._b, self._x, self._loaded, self._load_vec):
+        for obj in (self.snes, self._free_snes, self._A, self._b, self._x, self._loaded, self._load_vec):
             if obj is not None:
                 obj.destroy()

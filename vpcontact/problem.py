@@ -14,7 +14,7 @@ current Newton iterate; the Jacobian uses their consistent tangent dσ_n/dε_n.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Callable, Dict, Optional
+from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
 import ufl
@@ -40,12 +40,21 @@ class StepReport:
     newton_iterations: int
 
 
+@dataclass(frozen=True)
+class PointLoad:
+    """A concentrated force F(t) [N] at a mesh vertex ``at``."""
+
+    at: Sequence[float]
+    force: Callable[[float], Sequence[float]]
+
+
 @dataclass
 class Loads:
-    """Body force f_0 and surface tractions f_2 (by facet tag)."""
+    """Body force f_0, surface tractions f_2 (by facet tag) and point loads."""
 
     body_force: Optional[Load] = None
     tractions: Dict[int, Load] = field(default_factory=dict)
+    points: List[PointLoad] = field(default_factory=list)
 
 
 class QuasistaticProblem:
@@ -128,9 +137,15 @@ class QuasistaticProblem:
         # Unknown scale for SNES: an exact power of two far below any displacement of interest.
         extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
         scale = 2.0 ** (np.floor(np.log2(extent)) - 40)
+        self._point_loads = [_PointDofs(self.V, p) for p in loads.points]
+        # Only what is called for: a constitutive update linear in ε with no compliance term
+        # has a Jacobian that changes with the step size only; it is factorized once per size.
+        constant_jacobian = law.linear_in_strain and (contact is None or isinstance(contact, Signorini))
         self.solver = StepSolver(residual, jacobian, self.u, self.bcs, self._update_stress,
                                  options, options_prefix, scale=scale,
-                                 load=sum(external[1:], external[0]) if external else None)
+                                 load=sum(external[1:], external[0]) if external else None,
+                                 point_forces=self._point_forces if self._point_loads else None,
+                                 constant_jacobian=constant_jacobian)
         self.contact_dofs = None
         self.contact_monitor = None
         if isinstance(contact, Signorini):
@@ -139,6 +154,7 @@ class QuasistaticProblem:
             self.solver.set_bounds(*variable_bounds(self.u, self.contact_dofs))
             self.contact_monitor = ContactMonitor(self.u, self.contact_dofs, self.equilibrium,
                                                   facet_tags, contact.tag)
+        self._contact_active = False  # after the last accepted step
         self.step_index = 0
         self.reports: list[StepReport] = []
         self._u_prev: Optional[np.ndarray] = None  # u_{n-1}, for the predictor
@@ -169,9 +185,15 @@ class QuasistaticProblem:
             # Ghost entries are extrapolated from ghost entries: consistent without a scatter.
             self.u.x.array[:] += (dt / self._dt_prev) * (u_old - self._u_prev)
         self.dt = dt
+        self.solver.dt = dt
         self.time.value = t_new
         try:
-            its = self.solver.solve(t_new, n)
+            # Signorini with a Jacobian that is factorized once: while nothing touches, a plain
+            # Newton step with that factorization is tried first, and the VI (which factorizes
+            # its reduced matrix every iteration) runs only when the result would penetrate.
+            # With a nonlinear law every iteration factorizes anyway; the VI costs no more.
+            free_first = self.solver.constant_jacobian and not self._contact_active
+            its = self.solver.solve(t_new, n, try_unconstrained=free_first)
             self._check_finite(t_new, n)
         except Exception:
             self.u.x.array[:] = u_old
@@ -179,16 +201,61 @@ class QuasistaticProblem:
             self.state.rollback()
             raise
         self.state.commit()
+        self._contact_active = self._any_contact_active()
         self._u_prev, self._dt_prev = u_old, dt
         self.step_index = n
         report = StepReport(n, t_new, its)
         self.reports.append(report)
         return report
 
+    def _point_forces(self):
+        t = float(self.time.value)
+        dofs = [p.dofs for p in self._point_loads]
+        values = [p.values(t) for p in self._point_loads]
+        return np.concatenate(dofs), np.concatenate(values)
+
+    def _any_contact_active(self) -> bool:
+        if self.contact_dofs is None:
+            return False
+        cd = self.contact_dofs
+        local = bool(np.any(cd.normal_displacement(self.u) >= cd.gap - 1e-6 * self.solver.scale))
+        return self.mesh.comm.allreduce(local, op=MPI.LOR)
+
     def _check_finite(self, t: float, n: int) -> None:
         local_ok = bool(np.isfinite(self.u.x.array).all() and np.isfinite(self.state.stress.x.array).all())
         if not self.mesh.comm.allreduce(local_ok, op=MPI.LAND):
             raise NonFiniteStateError(f"time step {n} (t = {t:.6g}) produced NaN/Inf in the state")
+
+
+class _PointDofs:
+    """The owned dofs of the vertex where a point load acts (on one rank only)."""
+
+    def __init__(self, V, load: PointLoad):
+        mesh = V.mesh
+        dim = mesh.topology.dim
+        at = np.zeros(3)
+        at[:dim] = np.asarray(load.at, dtype=np.float64)[:dim]
+        extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
+        tol = 1e-8 * extent
+        blocks = fem.locate_dofs_geometrical(
+            V, lambda x: np.linalg.norm(x - at[:, None], axis=0) <= tol)
+        owned = blocks[blocks < V.dofmap.index_map.size_local]
+        found = mesh.comm.allreduce(len(owned), op=MPI.SUM)
+        if found == 0:
+            raise InputError(f"point load at {list(load.at)} is not at a mesh vertex (tolerance {tol:.3g})")
+        # A vertex shared by ranks is owned by one of them: exactly one rank applies the load.
+        bs = V.dofmap.index_map_bs
+        self.dofs = (owned[:1, None] * bs + np.arange(bs)[None, :]).ravel().astype(np.int32)
+        self.force = load.force
+        self.dim = dim
+
+    def values(self, t: float) -> np.ndarray:
+        if len(self.dofs) == 0:
+            return np.zeros(0)
+        f = np.asarray(self.force(t), dtype=np.float64).reshape(-1)
+        if f.shape != (self.dim,):
+            raise InputError(f"point load force must have {self.dim} components, got {f.shape[0]}")
+        return f
 
 
 def _as_vector(expr, dim: int):
