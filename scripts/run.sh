@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # SPDX-License-Identifier: MIT
-# Quick start, command 1: set up if needed, then run the main job on the bundled default case.
-# Extra arguments are passed to the demo (e.g. --out DIR).
+# Quick start, command 1: set up if needed, then run the main job: the bundled default scene (the
+# paper's 2-D Signorini test) through the command line. Extra arguments go to `vpcontact run`
+# (e.g. a scene name or file, --out DIR, --petsc-options KEY=VALUE ...).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/setup.sh"
 cd "$ROOT"
-exec "$VPCONTACT_PYTHON" demos/normal_compliance_1d.py "$@"
+exec "$VPCONTACT_PYTHON" -m vpcontact run "$@"

@@ -127,6 +127,7 @@ class StepSolver:
         self._loaded_valid = False
         self.total_iterations = 0
         self.jacobian_assemblies = 0
+        self.vi_solves = 0  # SNES VI runs (Signorini steps not settled by plain Newton)
         self.kernel_calls = 0
         #: wall time [s] spent in the refresh hook (kernels), residual and Jacobian assembly,
         #: and in SNES solves altogether (the rest of which is linear solves and VI work)
@@ -277,6 +278,7 @@ class StepSolver:
         if snes is self.snes:
             reason, more = self._run(self.snes)
             its += more
+            self.vi_solves += self._bounds is not None
         self._load_iterate(self._x)
         if reason <= 0:
             ksp_reason = snes.getKSP().getConvergedReason()

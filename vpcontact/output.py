@@ -97,14 +97,22 @@ class XdmfSeries:
 
 
 class ContactHistory:
-    """u_ν, gap and nodal σ_ν at the Signorini contact nodes over time, gathered on rank 0."""
+    """u_ν, gap and nodal σ_ν at the contact nodes over time, gathered on rank 0.
 
-    def __init__(self, problem):
-        if problem.contact_dofs is None:
+    Args:
+        problem: the problem.
+        cdofs: the contact nodes (default: the problem's Signorini dofs).
+        pressure: u -> nodal σ_ν at ``cdofs`` (default: from the Signorini contact monitor).
+    """
+
+    def __init__(self, problem, cdofs=None, pressure=None):
+        cd = cdofs if cdofs is not None else problem.contact_dofs
+        if cd is None:
             raise ValueError("the problem has no Signorini contact boundary")
         self.problem = problem
+        self.cdofs = cd
+        self._pressure = pressure
         self.comm = problem.mesh.comm
-        cd = problem.contact_dofs
         self.points = _gather(self.comm, cd.points)
         self.gap = _gather(self.comm, cd.gap)
         self.times: list[float] = []
@@ -112,10 +120,14 @@ class ContactHistory:
         self.pressure: list[np.ndarray] = []
 
     def record(self, t: float) -> None:
-        cd = self.problem.contact_dofs
-        mon = self.problem.contact_monitor
+        cd = self.cdofs
+        if self._pressure is not None:
+            local = self._pressure(self.problem.u)
+        else:
+            mon = self.problem.contact_monitor
+            local = mon.nodal_forces() / mon.weights
         un = _gather(self.comm, cd.normal_displacement(self.problem.u))
-        p = _gather(self.comm, mon.nodal_forces() / mon.weights)
+        p = _gather(self.comm, local)
         if self.comm.rank == 0:
             self.times.append(t)
             self.normal_displacement.append(un)

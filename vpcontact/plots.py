@@ -82,7 +82,7 @@ def contact_evolution(path: str | Path, history: ContactHistory, axis: int, titl
         sel = np.isclose(pts[:, c], nearest)
     order = np.argsort(pts[sel, axis])
     xs = pts[sel, axis][order]
-    normal_sign = history.problem.contact_dofs.sign
+    normal_sign = history.cdofs.sign
     u = np.array(history.normal_displacement)[:, sel][:, order] * normal_sign   # component value
     times = np.array(history.times)
     fig, (ax_a, ax_b) = plt.subplots(1, 2, figsize=(11, 4.2))

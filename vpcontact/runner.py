@@ -28,12 +28,18 @@ class RunRecord:
 
 def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Path] = None,
         name: str = "result", xdmf: bool = True, verbose: bool = True,
-        max_cuts: int = 12) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
+        max_cuts: int = 12, history: Optional[ContactHistory] = None,
+        csv_name: str = "contact_history.csv", progress=None, xdmf_every: int = 1,
+        ) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
     """Advance ``problem`` to ``t_final`` with steps of at most ``dt``, writing outputs into ``out``.
 
     A step that does not converge is rejected and retried with half the step, at most
     ``max_cuts`` times in a row (see :mod:`vpcontact.stepping`). If it still fails, the outputs of
     the accepted steps are written, ``record.completed`` stays False and the error is re-raised.
+
+    ``history`` records the contact nodes (default: a Signorini problem's); ``progress(step,
+    report)`` is called after every accepted step on every rank; the XDMF series gets every
+    ``xdmf_every``-th step and the last one.
 
     Returns the run record, the contact history (Signorini problems) and the cell stress fields.
     """
@@ -47,7 +53,8 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         comm.barrier()
     if out is not None and xdmf:
         series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells)
-    history = ContactHistory(problem) if problem.contact_dofs is not None else None
+    if history is None and problem.contact_dofs is not None:
+        history = ContactHistory(problem)
     record = RunRecord()
     if history is not None:
         history.record(0.0)
@@ -62,8 +69,11 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                 record.contact.append(report)
             if history is not None:
                 history.record(step.time)
-            if series is not None:
+            last = step.time >= t_final * (1 - 1e-12)
+            if series is not None and (step.step % xdmf_every == 0 or last):
                 series.write(step.time)
+            if progress is not None:
+                progress(step, report)
             if verbose and comm.rank == 0:
                 active = f"  active contact dofs {report.active:4d}" if report else ""
                 print(f"step {step.step:4d}  t = {step.time:.4f}  Newton its {step.newton_iterations}"
@@ -76,7 +86,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         record.wall_time = _time.perf_counter() - start
         cells.update()
         if out is not None and history is not None:
-            history.write_csv(Path(out) / "contact_history.csv")
+            history.write_csv(Path(out) / csv_name)
     return record, history, cells
 
 

@@ -1,0 +1,211 @@
+# SPDX-License-Identifier: MIT
+"""The command line on bundled and hand-written scenes: outputs, exit codes, located errors, and
+"only what the scene calls for" (no viscoplastic kernel, no VI, one factorization when possible).
+
+Scenes run at reduced size (coarser mesh, shorter T) by rewriting their ``cells``/``T``/``k`` lines.
+"""
+
+import json
+import math
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from vpcontact import bar1d, cli
+from vpcontact import scene as scenes
+from vpcontact.build import build
+from vpcontact.constitutive import LinearRate, Perzyna
+
+
+def _small(name: str, folder: Path, cells: str, T: float, k: float, extra: str = "") -> Path:
+    """A bundled scene with its mesh, final time and step replaced, written into ``folder``."""
+    text = scenes.bundled()[name].read_text()
+    text = re.sub(r"(?m)^cells = .*$", f"cells = {cells}", text)
+    text = re.sub(r"(?m)^T = .*$", f"T = {T}", text)
+    text = re.sub(r"(?m)^k = .*$", f"k = {k}", text)
+    path = folder / f"{name}.toml"
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text + extra)
+    MPI.COMM_WORLD.barrier()
+    return path
+
+
+def _summary(out: Path) -> dict:
+    return json.loads((out / "summary.json").read_text())
+
+
+def test_list_shows_every_bundled_scene(capsys):
+    assert cli.main(["list"]) == 0
+    shown = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:
+        for name in scenes.bundled():
+            assert name in shown
+
+
+@pytest.mark.parametrize("name", sorted(scenes.bundled()))
+def test_bundled_scenes_validate(name, capsys):
+    assert cli.main(["validate", name]) == 0
+
+
+def test_show_prints_a_scene_that_loads_again(capsys):
+    assert cli.main(["show", "signorini_3d"]) == 0
+    text = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:
+        assert scenes.loads_text(text) == scenes.load(scenes.resolve("signorini_3d"))
+
+
+def test_bad_scene_exits_2_with_its_place_and_writes_nothing(shared_tmp_path, capsys):
+    bad = _small("elastic_2d", shared_tmp_path, "[4, 2]", 1.0, 0.5)
+    text = bad.read_text().replace("E = 1e5", "E = -1e5")
+    if MPI.COMM_WORLD.rank == 0:
+        bad.write_text(text)
+    MPI.COMM_WORLD.barrier()
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(bad), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        line = 1 + text.splitlines().index("E = -1e5")
+        assert f"{bad}:{line}: material.E" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("change, where, message", [
+    (("value = 4.0", "value = 5.0"), "boundary.end", "selects no boundary facet"),
+    (("[boundary.end]\nkind = \"traction\"\nplane = { axis = \"x\", value = 4.0 }",
+      "[boundary.end]\nkind = \"traction\"\nplane = { axis = \"x\", value = 0.0 }"),
+     "boundary.end", "overlap"),
+])
+def test_mesh_level_errors_are_located(shared_tmp_path, capsys, change, where, message):
+    path = _small("elastic_2d", shared_tmp_path, "[4, 2]", 1.0, 0.5)
+    text = path.read_text()
+    assert change[0] in text
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text.replace(change[0], change[1]))
+    MPI.COMM_WORLD.barrier()
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert re.search(rf"{re.escape(str(path))}:\d+: {where}: .*{message}", err), err
+    assert not out.exists()
+
+
+def test_elastic_scene_uses_one_factorization_and_no_viscoplastic_kernel(shared_tmp_path):
+    path = _small("elastic_2d", shared_tmp_path, "[16, 4]", 1.0, 0.1)
+    model = build(scenes.load(path))
+    law = model.problem.law
+    assert isinstance(law, LinearRate) and law.a == 0 and law.b == 0  # σ = E ε: no Perzyna
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    summary = _summary(out)
+    assert summary["completed"] and summary["steps"] == 10
+    assert summary["jacobian_assemblies"] == 1, "one assembly (and factorization) for all steps"
+    assert summary["vi_solves"] == 0
+    assert (out / "elastic_2d.xdmf").exists()
+    assert not (out / "contact.csv").exists() and not (out / "final_state.png").exists()
+
+
+def test_unreached_obstacle_costs_no_vi_and_changes_nothing(shared_tmp_path):
+    free = _small("elastic_2d", shared_tmp_path, "[16, 4]", 1.0, 0.25)
+    text = free.read_text()
+    contact = text.replace('[boundary.end]', '[boundary.floor]\nkind = "contact"\n'
+                           'plane = { axis = "y", value = 0.0 }\n\n[boundary.end]')
+    contact += '\n[contact]\ntype = "signorini"\nboundary = "floor"\ngap = 10.0\n'
+    path = shared_tmp_path / "far_obstacle.toml"
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(contact)
+    MPI.COMM_WORLD.barrier()
+    results = []
+    for scene_path in (free, path):
+        model = build(scenes.load(scene_path))
+        for _ in range(4):
+            model.problem.step(0.25)
+        u = model.problem.u  # global measures: the two meshes may be partitioned differently
+        low = MPI.COMM_WORLD.allreduce(float(u.x.array.min()), op=MPI.MIN)
+        results.append(np.array([u.vector.norm(), low]))
+        solver = model.problem.solver
+        assert solver.vi_solves == 0 and solver.jacobian_assemblies == 1
+    diff = np.abs(results[0] - results[1]).max() / np.abs(results[0]).max()
+    assert diff <= 1e-12, f"relative difference {diff:.2e}"
+
+
+def test_reached_obstacle_switches_to_the_vi(shared_tmp_path):
+    free = _small("elastic_2d", shared_tmp_path, "[16, 4]", 1.0, 0.25)
+    text = free.read_text().replace('[boundary.end]', '[boundary.floor]\nkind = "contact"\n'
+                                    'plane = { axis = "y", value = 0.0 }\n\n[boundary.end]')
+    text += '\n[contact]\ntype = "signorini"\nboundary = "floor"\ngap = 1e-5\n'
+    path = shared_tmp_path / "near_obstacle.toml"
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text)
+    MPI.COMM_WORLD.barrier()
+    model = build(scenes.load(path))
+    for _ in range(4):
+        model.problem.step(0.25)
+    report = model.problem.contact_monitor.report()
+    assert model.problem.solver.vi_solves > 0 and report.active > 0
+    assert report.max_penetration <= 1e-10
+
+
+def test_1d_scene_reproduces_the_exact_solution(shared_tmp_path):
+    # §4.2.1 with h = k = 0.05 up to t = 2 (contact from t = ln 2): nodal error O(h + k).
+    path = _small("normal_compliance_1d", shared_tmp_path, "[20]", 2.0, 0.05)
+    out = shared_tmp_path / "out1d"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    model = build(scenes.load(path))
+    for _ in range(40):
+        model.problem.step(0.05)
+    V = model.problem.V
+    x = V.sub(0).collapse()[0].tabulate_dof_coordinates()[:, 0]  # bs = 1: the same dof order
+    owned = V.dofmap.index_map.size_local
+    err = np.abs(model.problem.u.x.array[:owned] - bar1d.exact_displacement(x[:owned], 2.0)).max()
+    err = MPI.COMM_WORLD.allreduce(err, op=MPI.MAX)
+    assert err < 0.1 * 0.05, f"max nodal error {err:.3e} at r = 0.05 (paper: C r, C = 0.0956)"
+    rows = (out / "contact.csv").read_text().splitlines()
+    assert rows[0] == "t,x,y,z,u_normal,gap,pressure" and len(rows) == 1 + 41  # t = 0 and 40 steps
+    last = [float(v) for v in rows[-1].split(",")]
+    assert last[4] > last[5] and last[6] == pytest.approx(-(last[4] - last[5]) / 100.0)
+
+
+@pytest.mark.parametrize("name, cells, T, k", [
+    ("signorini_2d", "[6, 6]", 0.2, 0.1),
+    ("signorini_3d", "[6, 2, 2]", 0.2, 0.1),
+    ("normal_compliance_2d", "[12, 6]", 0.2, 0.1),
+    ("normal_compliance_3d", "[6, 2, 2]", 0.2, 0.1),
+])
+def test_bundled_scene_runs_and_writes_its_outputs(shared_tmp_path, name, cells, T, k):
+    path = _small(name, shared_tmp_path, cells, T, k)
+    out = shared_tmp_path / name
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    summary = _summary(out)
+    assert summary["completed"] and math.isclose(summary["final_time"], T)
+    assert summary["scene"]["sha256"] == scenes.load(path).hash
+    for f in (f"{name}.xdmf", "contact.csv", "final_state.png", "contact_history.png"):
+        assert (out / f).exists(), f
+    values = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
+    assert np.isfinite(values).all() and (values[:, 6] <= 1e-8).all()  # compressive only
+
+
+def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, capsys):
+    # One Newton iteration allowed and no step halving: the first step cannot converge.
+    path = _small("signorini_2d", shared_tmp_path, "[4, 4]", 1.0, 0.5,
+                  extra="\n[solver]\npetsc_options = { snes_max_it = 1 }\n")
+    text = re.sub(r"(?m)^k = .*$", "k = 0.5\nmax_cuts = 0", path.read_text())
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text)
+    MPI.COMM_WORLD.barrier()
+    out = shared_tmp_path / "failed"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 1
+    summary = _summary(out)
+    assert summary["completed"] is False and "DIVERGED_MAX_IT" in summary["error"]
+    assert summary["steps"] == 0
+    if MPI.COMM_WORLD.rank == 0:
+        assert "the simulation failed" in capsys.readouterr().err
+
+
+def test_perzyna_scene_builds_the_viscoplastic_law():
+    model = build(scenes.load(scenes.resolve("signorini_2d")))
+    assert isinstance(model.problem.law, Perzyna)
+    assert model.problem.law.sigma_y == pytest.approx(math.sqrt(10.0))

@@ -1,0 +1,246 @@
+# SPDX-License-Identifier: MIT
+"""From a scene (:mod:`vpcontact.scene`) to a :class:`~vpcontact.problem.QuasistaticProblem`.
+
+Only what the scene calls for is built: an elastic law runs the linear stress update (never the
+viscoplastic kernel), a scene without ``[contact]`` gets neither a compliance term nor a
+variational inequality, and a law linear in ε is factorized once per step size
+(see :class:`~vpcontact.nonlinear.StepSolver`). Problems found on the mesh (a boundary part
+that selects no facets, parts that overlap, a Gmsh tag that does not exist, a point load off
+the vertices) are reported with their place in the scene file.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Dict, Optional
+
+import numpy as np
+import ufl
+from dolfinx import fem, mesh as dmesh
+from mpi4py import MPI
+
+from vpcontact.constitutive import Elastic, Elasticity, LinearRate, Perzyna
+from vpcontact.contact import NormalCompliance
+from vpcontact.errors import InputError
+from vpcontact.problem import Loads, PointLoad, QuasistaticProblem
+from vpcontact.scene import Scene
+from vpcontact.signorini import Signorini
+
+_CELL_TYPES = {"interval": dmesh.CellType.interval, "triangle": dmesh.CellType.triangle,
+               "quadrilateral": dmesh.CellType.quadrilateral,
+               "tetrahedron": dmesh.CellType.tetrahedron, "hexahedron": dmesh.CellType.hexahedron}
+_DIAGONALS = {"right": dmesh.DiagonalType.right, "left": dmesh.DiagonalType.left,
+              "crossed": dmesh.DiagonalType.crossed, "left/right": dmesh.DiagonalType.left_right,
+              "right/left": dmesh.DiagonalType.right_left}
+
+
+@dataclass
+class Model:
+    """A built scene: the problem and what the outputs need to know about it."""
+
+    scene: Scene
+    problem: QuasistaticProblem
+    facet_tags: dmesh.MeshTagsMetaClass
+    part_tags: Dict[str, int]           # boundary part name -> facet tag
+    contact_tag: Optional[int]
+
+
+def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
+    """Build the mesh, boundary parts, law, loads, contact and initial state of ``scene``.
+
+    Raises:
+        SceneError: a problem only visible on the mesh, located in the scene file.
+    """
+    mesh, gmsh_tags = _mesh(scene, comm)
+    part_tags, facet_tags = _boundary_parts(scene, mesh, gmsh_tags)
+    law = _law(scene)
+    loads = _loads(scene, part_tags)
+    contact, contact_tag = _contact(scene, part_tags, mesh)
+    clamped = [part_tags[n] for n, p in scene.boundaries.items() if p.kind == "clamped"]
+    facet_tags = _merge_clamped(mesh, facet_tags, clamped)
+    try:
+        problem = QuasistaticProblem(mesh, facet_tags, law, clamped_tag=clamped[0], loads=loads,
+                                     contact=contact, degree=scene.degree,
+                                     petsc_options=dict(scene.solver.petsc_options),
+                                     predictor=scene.solver.predictor)
+    except InputError as err:
+        raise scene.error(_blame(scene, str(err)), str(err)) from None
+    _initial_state(scene, problem)
+    return Model(scene, problem, facet_tags, part_tags, contact_tag)
+
+
+def _mesh(scene: Scene, comm):
+    spec = scene.mesh
+    if spec.type == "gmsh":
+        from dolfinx.io import gmshio
+        try:
+            mesh, _, facet_tags = gmshio.read_from_msh(str(spec.file), comm, gdim=spec.dim)
+        except Exception as err:  # gmsh reports bad files in many ways
+            raise scene.error("mesh.file", f"cannot read the Gmsh file: {err}") from None
+        return mesh, facet_tags
+    cell = _CELL_TYPES[spec.cell_type]
+    lower, upper = np.array(spec.lower, dtype=float), np.array(spec.upper, dtype=float)
+    if spec.dim == 1:
+        return dmesh.create_interval(comm, spec.cells[0], [lower[0], upper[0]]), None
+    if spec.dim == 2:
+        diagonal = _DIAGONALS[spec.diagonal or "right"]
+        return dmesh.create_rectangle(comm, [lower, upper], list(spec.cells), cell,
+                                      diagonal=diagonal), None
+    return dmesh.create_box(comm, [lower, upper], list(spec.cells), cell), None
+
+
+def _boundary_parts(scene: Scene, mesh, gmsh_tags):
+    """One facet tag per part (1, 2, ... in scene order); every part non-empty, none overlapping."""
+    fdim = mesh.topology.dim - 1
+    mesh.topology.create_connectivity(fdim, mesh.topology.dim)
+    extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
+    indices, values, part_tags = [], [], {}
+    for i, (name, part) in enumerate(scene.boundaries.items(), start=1):
+        if part.tag is not None:
+            found = gmsh_tags.find(part.tag) if gmsh_tags is not None else np.zeros(0, np.int32)
+            boundary = dmesh.exterior_facet_indices(mesh.topology)
+            facets = np.intersect1d(found, boundary).astype(np.int32)
+            what = f"Gmsh physical tag {part.tag} marks no boundary facet"
+        else:
+            facets = dmesh.locate_entities_boundary(mesh, fdim, _selector(part, extent))
+            what = "selects no boundary facet"
+        if mesh.comm.allreduce(len(facets), op=MPI.SUM) == 0:
+            raise scene.error(f"boundary.{name}", f"boundary part '{name}' {what}")
+        part_tags[name] = i
+        indices.append(facets)
+        values.append(np.full(len(facets), i, dtype=np.int32))
+    indices, values = np.concatenate(indices), np.concatenate(values)
+    unique, counts = np.unique(indices, return_counts=True)
+    shared = np.isin(indices, unique[counts > 1])
+    clash = sorted(set().union(*mesh.comm.allgather(set(values[shared].tolist()))))
+    if clash:
+        names = [n for n, t in part_tags.items() if t in clash]
+        raise scene.error(f"boundary.{names[-1]}", "boundary parts " + ", ".join(
+            f"'{n}'" for n in names) + " overlap: a facet may belong to one part only")
+    order = np.argsort(indices)
+    tags = dmesh.meshtags(mesh, fdim, indices[order].astype(np.int32), values[order])
+    return part_tags, tags
+
+
+def _selector(part, extent: float):
+    if part.plane is not None:
+        axis, value = part.plane.axis, part.plane.value
+        tol = part.plane.tol if part.plane.tol is not None else 1e-8 * extent
+        return lambda x: np.abs(x[axis] - value) <= tol
+    if part.box is not None:
+        tol = 1e-10 * extent
+        lo, hi = np.array(part.box.lower), np.array(part.box.upper)
+        d = len(lo)
+        return lambda x: np.all((x[:d] >= lo[:, None] - tol) & (x[:d] <= hi[:, None] + tol), axis=0)
+    expr = part.where
+    return lambda x: np.asarray(expr.numpy(x), dtype=bool) & np.ones(x.shape[1], dtype=bool)
+
+
+def _merge_clamped(mesh, tags, clamped):
+    """Several clamped parts become one Γ1 tag (the first one's)."""
+    if len(clamped) == 1:
+        return tags
+    values = tags.values.copy()
+    values[np.isin(values, clamped)] = clamped[0]
+    return dmesh.meshtags(mesh, tags.dim, tags.indices, values)
+
+
+def _law(scene: Scene):
+    spec, mat, dim = scene.law, scene.material, scene.dim
+    if dim == 2 and mat.plane == "strain":
+        raise scene.error("material.plane", "plane strain is not supported yet (the kernels "
+                          "implement plane stress in 2-D); use plane = \"stress\" or a 3-D mesh")
+    model = {1: "1d", 2: "plane_stress", 3: "3d"}[dim]
+    if dim == 3 and spec.type == "perzyna" and spec.yield_set == "von_mises":
+        model = "3d_standard"
+    elasticity = Elasticity(model, mat.E, mat.nu if mat.nu is not None else 0.0)
+    if spec.type == "elastic":
+        return Elastic(elasticity)
+    if spec.type == "linear":
+        return LinearRate(elasticity, spec.a.value(), spec.b.value(), scheme=spec.scheme)
+    return Perzyna(elasticity, sigma_y=spec.sigma_y.value(), mu_star=spec.mu_star.value(),
+                   scheme=spec.scheme)
+
+
+def _vector(exprs, dim):
+    """(x, t) -> UFL vector (scalar in 1-D) of expressions."""
+    def load(x, t):
+        parts = [e.ufl(x, t) for e in exprs]
+        return parts[0] if dim == 1 else ufl.as_vector(parts)
+    return load
+
+
+def _is_zero(exprs) -> bool:
+    return all(e.is_constant and e.value() == 0.0 for e in exprs)
+
+
+def _loads(scene: Scene, part_tags) -> Loads:
+    dim = scene.dim
+    loads = Loads()
+    if not _is_zero(scene.loads.body_force):
+        loads.body_force = _vector(scene.loads.body_force, dim)
+    for name, part in scene.boundaries.items():
+        if part.kind == "traction" and part.traction is not None and not _is_zero(part.traction):
+            loads.tractions[part_tags[name]] = _vector(part.traction, dim)
+    for p in scene.loads.point:
+        force = p.force
+        loads.points.append(PointLoad(tuple(p.at), lambda t, f=force: [e.value(t) for e in f]))
+    return loads
+
+
+def _contact(scene: Scene, part_tags, mesh):
+    spec = scene.contact
+    if spec is None or spec.type == "none":
+        return None, None
+    tag = part_tags[spec.boundary]
+    gap = spec.gap
+    if spec.type == "normal_compliance":
+        if gap is None or gap.is_constant:
+            g = 0.0 if gap is None else gap.value()
+        else:
+            g = gap.ufl(ufl.SpatialCoordinate(mesh), 0.0)
+        return NormalCompliance(tag, mu=spec.mu, alpha=spec.alpha, gap=g), tag
+    if spec.obstacle is not None:
+        phi = spec.obstacle
+        return Signorini(tag, obstacle=lambda x: phi.numpy(x),
+                         max_distance=spec.max_distance or 1e3), tag
+    if gap is None or gap.is_constant:
+        return Signorini(tag, gap=0.0 if gap is None else gap.value()), tag
+    return Signorini(tag, gap=lambda x: gap.numpy(x)), tag
+
+
+def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
+    init, dim = scene.initial, scene.dim
+    if not _is_zero(init.u0):
+        exprs = init.u0
+        problem.u.interpolate(lambda x: np.vstack([np.broadcast_to(e.numpy(x), x.shape[1:])
+                                                   for e in exprs]))
+        if not np.isfinite(problem.u.x.array).all():
+            raise scene.error("initial.u0", "u0 is not finite at some mesh node")
+        st = problem.state
+        st.view(st.strain_old)[:] = st.strain_at_points()
+    if not _is_zero(init.sigma0):
+        exprs = init.sigma0
+        # s11 | s11 s22 s12 | s11 s22 s33 s23 s13 s12 -> Mandel: shear components × √2
+        factors = {1: [1.0], 2: [1.0, 1.0, math.sqrt(2.0)],
+                   3: [1.0, 1.0, 1.0] + [math.sqrt(2.0)] * 3}[dim]
+
+        def sigma0(points):
+            n = points.shape[1]
+            cols = [np.broadcast_to(e.numpy(points[:dim]), (n,)) for e in exprs]
+            return np.stack(cols, axis=1) * factors
+
+        problem.set_initial_stress(sigma0)
+        if not np.isfinite(problem.state.stress.x.array).all():
+            raise scene.error("initial.sigma0", "sigma0 is not finite at some quadrature point")
+
+
+def _blame(scene: Scene, message: str) -> str:
+    """The scene key an InputError from the problem set-up is most likely about."""
+    for key, path in (("clamped", "boundary"), ("gap", "contact.gap"), ("contact", "contact"),
+                      ("point load", "loads.point"), ("Poisson", "material.nu"),
+                      ("Young", "material.E")):
+        if key in message:
+            return path
+    return "mesh"

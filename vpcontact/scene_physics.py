@@ -1,0 +1,111 @@
+# SPDX-License-Identifier: MIT
+"""Reading the physics tables of a scene: ``[law]`` and ``[contact]``.
+
+* ``[law]``: σ̇ = E ε̇ + G(σ, ε) with G = 0 (``elastic``), Perzyna's
+  G = -(1/μ*) E(σ - P_K σ) (``perzyna``) or G = aσ + bε (``linear``).
+* ``[contact]``: Signorini's condition u_ν ≤ g (a gap g(x) or a rigid obstacle {φ ≤ 0}) or normal
+  compliance σ_ν = -(1/μ)(u_ν - g)_+^α (paper eq. (15)).
+"""
+
+from __future__ import annotations
+
+from vpcontact.expressions import Expression
+from vpcontact.scene_schema import Check, Table, at_least, between, constant_value, greater
+from vpcontact.scene_specs import ContactSpec, LawSpec
+
+__all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contact", "read_law"]
+
+LAW_KEYS = ("type", "scheme", "sigma_y", "mu_star", "yield_set", "a", "b")
+CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "max_distance", "mu", "alpha")
+LAW_TYPES = ("elastic", "perzyna", "linear")
+SCHEMES = ("explicit", "implicit")
+DEFAULT_SCHEME = {"elastic": "explicit", "perzyna": "implicit", "linear": "explicit"}
+PERZYNA_KEYS = ("sigma_y", "mu_star", "yield_set")
+LINEAR_KEYS = ("a", "b")
+CONTACT_TYPES = ("none", "signorini", "normal_compliance")
+DEFAULT_MAX_DISTANCE = 1e3
+
+
+def read_law(top: Table, dim: int | None) -> LawSpec:
+    """``[law]`` (absent: elastic)."""
+    t = top.section("law", LAW_KEYS)
+    law = t.choice("type", LAW_TYPES, "elastic")
+    scheme = t.choice("scheme", SCHEMES, DEFAULT_SCHEME.get(law, "explicit"))
+    if law != "perzyna":
+        for key in PERZYNA_KEYS:
+            t.forbid(key, "only for type = 'perzyna'")
+    if law != "linear":
+        for key in LINEAR_KEYS:
+            t.forbid(key, "only for type = 'linear'")
+    if law == "perzyna":
+        return LawSpec(law, scheme, sigma_y=_constant(t, "sigma_y", greater(0)),
+                       mu_star=_constant(t, "mu_star", greater(0)),
+                       yield_set=_yield_set(t, dim))
+    if law == "linear":
+        return LawSpec(law, scheme, a=_constant(t, "a"), b=_constant(t, "b"))
+    return LawSpec(law, scheme)
+
+
+def _yield_set(t: Table, dim: int | None) -> str | None:
+    """3-D: the paper's printed set (default) or von Mises; 1-D and 2-D: von Mises only."""
+    if dim == 3 or dim is None:
+        return t.choice("yield_set", ("paper", "von_mises"), "paper" if dim == 3 else None)
+    if t.data.get("yield_set", "von_mises") != "von_mises":
+        t.add("yield_set", "only 'von_mises' is available in 1-D and 2-D (|σ| ≤ σ_Y in 1-D, "
+                           "plane-stress von Mises in 2-D); 'paper' is a 3-D option")
+        return None
+    return "von_mises"
+
+
+def _constant(t: Table, key: str, check: Check | None = None) -> Expression | None:
+    """A required constant expression (a number or e.g. ``"sqrt(10)"``), finite and checked."""
+    expression = t.expr(key, (), None)
+    if expression is None:
+        return None
+    value = constant_value(t.report, t.at(key), expression)
+    message = check(value) if value is not None and check is not None else None
+    if message is not None:
+        t.add(key, message)
+    return expression if value is not None and message is None else None
+
+
+def read_contact(top: Table, dim: int | None) -> ContactSpec | None:
+    """``[contact]`` (absent: type none); ``None`` if its type is invalid."""
+    t = top.table("contact", CONTACT_KEYS)
+    if t is None:
+        return ContactSpec() if "contact" not in top.data else None
+    kind = t.choice("type", CONTACT_TYPES)
+    if kind is None:
+        return None
+    if kind == "none":
+        for key in CONTACT_KEYS[1:]:
+            t.forbid(key, "not used with type = 'none'")
+        return ContactSpec()
+    boundary = t.string("boundary")
+    if kind == "signorini":
+        for key in ("mu", "alpha"):
+            t.forbid(key, "only for type = 'normal_compliance'")
+        if t.has("obstacle"):
+            if t.has("gap"):
+                t.add("gap", "give either gap or obstacle, not both")
+            return ContactSpec(kind, boundary, obstacle=t.expr("obstacle", ("x",), dim),
+                               max_distance=t.number("max_distance", DEFAULT_MAX_DISTANCE,
+                                                     check=greater(0)))
+        t.forbid("max_distance", "only with an obstacle")
+        return ContactSpec(kind, boundary, gap=_gap(t, dim))
+    for key in ("obstacle", "max_distance"):
+        t.forbid(key, "only for type = 'signorini'")
+    return ContactSpec(kind, boundary, gap=_gap(t, dim), mu=t.number("mu", check=greater(0)),
+                       alpha=t.number("alpha", 1.0, check=between(0.0, 1.0, "(]")))
+
+
+def _gap(t: Table, dim: int | None) -> Expression | None:
+    """The initial gap g(x) (default 0); a constant gap must be ≥ 0."""
+    gap = t.expr("gap", ("x",), dim, 0)
+    if gap is None or not gap.is_constant:
+        return gap
+    value = constant_value(t.report, t.at("gap"), gap)
+    message = at_least(0)(value) if value is not None else None
+    if message is not None:
+        t.add("gap", message)
+    return gap if value is not None and message is None else None

@@ -1,0 +1,355 @@
+# SPDX-License-Identifier: MIT
+"""Reading the tables of a parsed scene file into the section dataclasses of :mod:`scene_specs`.
+
+Every reader reports what is wrong to a :class:`~vpcontact.scene_schema.Report` and goes on, so
+one pass finds all problems; the values it returns are only used when no problem was found.
+The physics sections (law, contact) are in :mod:`vpcontact.scene_physics`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Any
+
+from vpcontact.scene_locate import join
+from vpcontact.scene_physics import read_contact, read_law
+from vpcontact.scene_schema import (REQUIRED, Report, Table, at_least, between, fmt, greater, type_name,
+                                    unknown_key)
+from vpcontact.scene_specs import (BUILTIN_MESHES, CELL_TYPES, DIAGONALS, BoundaryPart,
+                                   BoxSelector, ContactSpec, InitialSpec, LoadSpec, MaterialSpec,
+                                   MeshSpec, OutputSpec, PlaneSelector, PointLoad, SolverSpec,
+                                   TimeSpec)
+
+__all__ = ["TOP_KEYS", "read_scene"]
+
+TOP_KEYS = ("name", "description", "mesh", "boundary", "loads", "material", "law", "contact",
+            "initial", "time", "discretization", "solver", "output")
+MESH_KEYS = ("type", "lower", "upper", "cells", "cell_type", "diagonal", "file", "dim")
+PART_KEYS = ("kind", "tag", "plane", "box", "where", "traction")
+SELECTORS = ("tag", "plane", "box", "where")
+KINDS = ("clamped", "traction", "contact")
+PART_NAME = r"[A-Za-z_][A-Za-z0-9_]*"
+SCENE_NAME = r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}"
+PETSC_KEY = r"[A-Za-z0-9_]+"
+AXES = {"x": 0, "y": 1, "z": 2}
+MAX_CELLS = 5_000_000
+MAX_STEPS = 10_000_000
+MAX_CUTS = 50
+#: Cells per box of the structured grid, by cell type (crossed triangles: 4).
+CELLS_PER_BOX = {"interval": 1, "triangle": 2, "quadrilateral": 1, "tetrahedron": 6,
+                 "hexahedron": 1}
+
+
+def zeros(n: int | None) -> tuple[int, ...] | None:
+    """The default of a vector of n expressions (``None`` if n is unknown)."""
+    return None if n is None else (0,) * n
+
+
+def read_scene(data: dict, report: Report, base_dir: Path, default_name: str) -> dict[str, Any]:
+    """All fields of a :class:`~vpcontact.scene.Scene` but its path, hash and locator."""
+    top = Table(report, "", data, TOP_KEYS)
+    mesh = read_mesh(top, base_dir)
+    dim = mesh.dim if mesh is not None else None
+    boundaries = read_boundaries(top, mesh)
+    contact = read_contact(top, dim)
+    check_parts(report, boundaries, contact, "contact" in data)
+    return {
+        "name": top.string("name", default_name, pattern=SCENE_NAME),
+        "description": top.string("description", ""),
+        "dim": dim,
+        "mesh": mesh,
+        "boundaries": boundaries,
+        "loads": read_loads(top, dim),
+        "material": read_material(top, dim),
+        "law": read_law(top, dim),
+        "contact": contact,
+        "initial": read_initial(top, dim),
+        "time": read_time(top),
+        "degree": top.section("discretization", ("degree",)).choice("degree", (1, 2), 1),
+        "solver": read_solver(top),
+        "output": read_output(top, contact),
+    }
+
+
+# -- mesh -----------------------------------------------------------------------------------
+
+def read_mesh(top: Table, base_dir: Path) -> MeshSpec | None:
+    """``[mesh]``: a built-in mesh or a Gmsh file."""
+    t = top.table("mesh", MESH_KEYS, required=True)
+    if t is None:
+        return None
+    mesh_type = t.choice("type", tuple(BUILTIN_MESHES) + ("gmsh",))
+    if mesh_type is None:
+        return None
+    if mesh_type == "gmsh":
+        return _gmsh_mesh(t, base_dir)
+    return _builtin_mesh(t, mesh_type)
+
+
+def _builtin_mesh(t: Table, mesh_type: str) -> MeshSpec:
+    dim = BUILTIN_MESHES[mesh_type]
+    for key in ("file", "dim"):
+        t.forbid(key, "only for type = 'gmsh'")
+    lower = t.numbers("lower", dim, (0.0,) * dim)
+    upper = t.numbers("upper", dim, (1.0,) * dim)
+    if lower is not None and upper is not None:
+        for i, (a, b) in enumerate(zip(lower, upper)):
+            if not b > a:
+                t.report.add(join(t.at("upper"), i),
+                             f"must exceed lower[{i}] = {fmt(a)}, got {fmt(b)}")
+    cells = t.numbers("cells", dim, integer=True, check=greater(0))
+    cell_type = t.choice("cell_type", tuple(CELL_TYPES), ("interval", "triangle", "tetrahedron")[dim - 1])
+    if cell_type is not None and CELL_TYPES[cell_type] != dim:
+        t.add("cell_type", f"{cell_type!r} cells are {CELL_TYPES[cell_type]}-D, but a "
+                           f"{mesh_type!r} mesh is {dim}-D")
+        cell_type = None
+    diagonal = None
+    if cell_type == "triangle":
+        diagonal = t.choice("diagonal", DIAGONALS, "right")
+    elif cell_type is not None:
+        t.forbid("diagonal", "only for triangle meshes")
+    if cells is not None and cell_type is not None:
+        count = math.prod(cells) * CELLS_PER_BOX[cell_type] * (2 if diagonal == "crossed" else 1)
+        if count > MAX_CELLS:
+            t.add("cells", f"too many cells ({count}, at most {MAX_CELLS})")
+    return MeshSpec(mesh_type, dim, lower=lower, upper=upper, cells=cells, cell_type=cell_type,
+                    diagonal=diagonal)
+
+
+def _gmsh_mesh(t: Table, base_dir: Path) -> MeshSpec:
+    for key in ("lower", "upper", "cells", "cell_type", "diagonal"):
+        t.forbid(key, "only for built-in meshes (interval, rectangle, box)")
+    dim = t.choice("dim", (2, 3))
+    name = t.string("file", max_length=4096)
+    file = None
+    if name is not None:
+        candidate = base_dir / name
+        try:
+            exists = "\x00" not in name and candidate.is_file()
+        except OSError:
+            exists = False
+        if exists:
+            file = candidate.resolve()
+        else:
+            t.add("file", f"Gmsh file not found: {candidate}")
+    return MeshSpec("gmsh", dim, file=file)
+
+
+# -- boundary -------------------------------------------------------------------------------
+
+def read_boundaries(top: Table, mesh: MeshSpec | None) -> dict[str, BoundaryPart]:
+    """``[boundary.<name>]`` tables, in file order."""
+    raw = top.data.get("boundary", {})
+    if not isinstance(raw, dict):
+        top.add("boundary", f"expected tables [boundary.<name>], got {type_name(raw)}")
+        return {}
+    parts = {}
+    for name, value in raw.items():
+        path = join("boundary", name)
+        if not re.fullmatch(PART_NAME, name):
+            top.report.add(path, f"part name {name!r} must match {PART_NAME}")
+        if not isinstance(value, dict):
+            top.report.add(path, f"expected a table [boundary.{name}], got {type_name(value)}")
+            continue
+        parts[name] = _read_part(Table(top.report, path, value, PART_KEYS), name, mesh)
+    return parts
+
+
+def _read_part(t: Table, name: str, mesh: MeshSpec | None) -> BoundaryPart:
+    dim = mesh.dim if mesh is not None else None
+    kind = t.choice("kind", KINDS)
+    given = [key for key in SELECTORS if t.has(key)]
+    if not given:
+        t.report.add(t.path, "needs exactly one selector: tag, plane, box or where")
+    for key in given[1:]:
+        t.add(key, f"only one selector per part; {given[0]!r} is already given")
+    tag = plane = box = where = None
+    if t.has("tag"):
+        if mesh is not None and mesh.builtin:
+            t.add("tag", "tags need mesh.type = 'gmsh'; select parts of built-in meshes with "
+                         "plane, box or where")
+        else:
+            tag = t.integer("tag", check=greater(0))
+    if t.has("plane"):
+        plane = _read_plane(t, dim)
+    if t.has("box"):
+        box = _read_box(t, dim)
+    if t.has("where"):
+        where = t.expr("where", ("x",), dim, condition=True)
+    traction = None
+    if kind == "traction":
+        traction = t.exprs("traction", ("x", "t"), dim, dim, zeros(dim))
+    elif kind is not None:
+        t.forbid("traction", "only for kind = 'traction'")
+    return BoundaryPart(name, kind, tag=tag, plane=plane, box=box, where=where, traction=traction)
+
+
+def _read_plane(t: Table, dim: int | None) -> PlaneSelector | None:
+    p = t.table("plane", ("axis", "value", "tol"))
+    if p is None:
+        return None
+    raw_axis = p.choice("axis", ("x", "y", "z", 0, 1, 2))
+    axis = AXES.get(raw_axis, raw_axis)
+    if axis is not None and dim is not None and axis >= dim:
+        p.add("axis", f"axis {fmt(raw_axis)} does not exist in {dim}-D"
+                      + (" (use 'x')" if dim == 1 else ""))
+        axis = None
+    value = p.number("value")
+    tol = p.number("tol", None, check=greater(0))
+    if axis is None or value is None or (p.has("tol") and tol is None):
+        return None
+    return PlaneSelector(axis, value, tol)
+
+
+def _read_box(t: Table, dim: int | None) -> BoxSelector | None:
+    b = t.table("box", ("lower", "upper"))
+    if b is None:
+        return None
+    lower, upper = b.numbers("lower", dim), b.numbers("upper", dim)
+    if lower is None or upper is None:
+        return None
+    bad = [i for i, (lo, hi) in enumerate(zip(lower, upper)) if hi < lo]
+    for i in bad:
+        b.report.add(join(b.at("upper"), i), f"must be >= lower[{i}] = {fmt(lower[i])}, "
+                                              f"got {fmt(upper[i])}")
+    return None if bad else BoxSelector(lower, upper)
+
+
+def check_parts(report: Report, parts: dict[str, BoundaryPart], contact: ContactSpec | None,
+                has_contact_table: bool) -> None:
+    """Cross checks: a clamped part exists; contact parts match ``[contact]``."""
+    if not any(part.kind == "clamped" for part in parts.values()):
+        report.add("boundary", "no boundary part has kind = 'clamped'; at least one is needed "
+                               "(the clamped part Γ1 must have positive measure)")
+    if contact is None:
+        return
+    for name, part in parts.items():
+        if part.kind != "contact":
+            continue
+        where = join(join("boundary", name), "kind")
+        if contact.type == "none":
+            why = ("the scene has no [contact] section" if not has_contact_table
+                   else "contact.type is 'none'")
+            report.add(where, f"boundary part {name!r} has kind 'contact' but {why}")
+        elif contact.boundary is not None and contact.boundary != name:
+            report.add(where, f"only one contact part is supported, and contact.boundary names "
+                              f"{contact.boundary!r}")
+    if contact.type != "none" and contact.boundary is not None:
+        target = parts.get(contact.boundary)
+        if target is None:
+            report.add("contact.boundary", f"no boundary part named {contact.boundary!r}"
+                                           + _suggest(contact.boundary, list(parts)))
+        elif target.kind is not None and target.kind != "contact":
+            report.add("contact.boundary", f"boundary part {contact.boundary!r} has kind "
+                                           f"{target.kind!r}, not 'contact'")
+
+
+def _suggest(name: str, names: list[str]) -> str:
+    hint = unknown_key(name, names)
+    return hint[hint.index(";"):] if names else " (the scene has no boundary parts)"
+
+
+# -- loads, material, initial state ---------------------------------------------------------
+
+def read_loads(top: Table, dim: int | None) -> LoadSpec:
+    """``[loads]``: body force and ``[[loads.point]]`` point loads."""
+    t = top.section("loads", ("body_force", "point"))
+    body_force = t.exprs("body_force", ("x", "t"), dim, dim, zeros(dim))
+    raw = t.data.get("point", [])
+    points = []
+    if not isinstance(raw, list):
+        t.add("point", f"expected an array of tables [[loads.point]], got {type_name(raw)}")
+        raw = []
+    for i, item in enumerate(raw):
+        if not isinstance(item, dict):
+            t.report.add(join(t.at("point"), i), f"expected a table, got {type_name(item)}")
+            continue
+        p = Table(t.report, join(t.at("point"), i), item, ("at", "force"))
+        points.append(PointLoad(p.numbers("at", dim), p.exprs("force", ("t",), dim, dim)))
+    return LoadSpec(body_force, tuple(points))
+
+
+def read_material(top: Table, dim: int | None) -> MaterialSpec:
+    """``[material]``: E, ν (not in 1-D) and the 2-D model."""
+    t = top.section("material", ("E", "nu", "plane"), required=True)
+    young = t.number("E", check=greater(0))
+    nu = plane = None
+    if dim == 1:
+        t.forbid("nu", "Poisson's ratio is not used in 1-D")
+    else:  # required in 2-D and 3-D (optional while the dimension is unknown)
+        nu = t.number("nu", None if dim is None else REQUIRED, check=between(-1.0, 0.5))
+    if dim == 2:
+        plane = t.choice("plane", ("stress", "strain"), "stress")
+    elif dim is not None:
+        t.forbid("plane", "only for 2-D scenes (plane stress or plane strain)")
+    return MaterialSpec(young, nu, plane)
+
+
+def read_initial(top: Table, dim: int | None) -> InitialSpec:
+    """``[initial]``: u_0(x) and σ_0(x) (Voigt order s11 s22 s33 s23 s13 s12, by dimension)."""
+    t = top.section("initial", ("u0", "sigma0"))
+    n_stress = {1: 1, 2: 3, 3: 6}.get(dim)
+    return InitialSpec(t.exprs("u0", ("x",), dim, dim, zeros(dim)),
+                       t.exprs("sigma0", ("x",), dim, n_stress, zeros(n_stress)))
+
+
+# -- time, solver, output -------------------------------------------------------------------
+
+def read_time(top: Table) -> TimeSpec:
+    """``[time]``: T > 0, 0 < k ≤ T, max_cuts."""
+    t = top.section("time", ("T", "k", "max_cuts"), required=True)
+    final, step = t.number("T", check=greater(0)), t.number("k", check=greater(0))
+    if final is not None and step is not None:
+        if step > final:
+            t.add("k", f"must be <= T = {fmt(final)}, got {fmt(step)}")
+        elif final / step > MAX_STEPS:
+            t.add("k", f"too many time steps (T/k = {final / step:.3g}, at most {MAX_STEPS})")
+    max_cuts = t.integer("max_cuts", 12, check=between(0, MAX_CUTS, "[]"))
+    return TimeSpec(final, step, max_cuts)
+
+
+def read_solver(top: Table) -> SolverSpec:
+    """``[solver]``: predictor and PETSc options (keys without the leading "-")."""
+    t = top.section("solver", ("predictor", "petsc_options"))
+    predictor = t.choice("predictor", ("linear", "none"), "linear")
+    raw = t.data.get("petsc_options", {})
+    if not isinstance(raw, dict):
+        t.add("petsc_options", f"expected a table, got {type_name(raw)}")
+        raw = {}
+    options = {}
+    for key, value in raw.items():
+        path = join(t.at("petsc_options"), key)
+        message = _petsc_option_problem(key, value)
+        if message is not None:
+            t.report.add(path, message)
+        else:
+            options[key] = value
+    return SolverSpec(predictor, options)
+
+
+def _petsc_option_problem(key: str, value: Any) -> str | None:
+    if key.startswith("-"):
+        return "write PETSc option names without the leading '-'"
+    if not re.fullmatch(PETSC_KEY, key):
+        return f"PETSc option name {key!r} must match {PETSC_KEY}"
+    if isinstance(value, float) and not math.isfinite(value):
+        return f"must be finite, got {fmt(value)}"
+    if isinstance(value, str) and (len(value) > 1000 or not value.isprintable()):
+        return "must be a printable string of at most 1000 characters"
+    if not isinstance(value, (str, int, float, bool)):
+        return f"expected a string, number or boolean, got {type_name(value)}"
+    return None
+
+
+def read_output(top: Table, contact: ContactSpec | None) -> OutputSpec:
+    """``[output]``: XDMF, contact CSV (only with contact), figures, XDMF stride."""
+    t = top.section("output", ("xdmf", "contact_csv", "figures", "every"))
+    with_contact = contact is not None and contact.type != "none"
+    contact_csv = t.boolean("contact_csv", with_contact)
+    if contact_csv and contact is not None and not with_contact:
+        t.add("contact_csv", "needs a [contact] section with type other than 'none'")
+    return OutputSpec(xdmf=t.boolean("xdmf", True), contact_csv=contact_csv,
+                      figures=t.boolean("figures", True),
+                      every=t.integer("every", 1, check=at_least(1)))

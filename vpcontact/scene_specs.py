@@ -1,0 +1,217 @@
+# SPDX-License-Identifier: MIT
+"""The sections of a resolved scene, as frozen dataclasses with every default filled in.
+
+They mirror the tables of a scene file (see :mod:`vpcontact.scene`). Expression-valued entries hold
+:class:`vpcontact.expressions.Expression` objects; entries that do not apply to a scene (e.g.
+``material.nu`` in 1-D or ``mesh.cells`` of a Gmsh mesh) are ``None``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from vpcontact.expressions import Expression
+
+__all__ = ["BoundaryPart", "BoxSelector", "ContactSpec", "InitialSpec", "LawSpec", "LoadSpec",
+           "MaterialSpec", "MeshSpec", "OutputSpec", "PlaneSelector", "PointLoad", "SolverSpec",
+           "TimeSpec", "BUILTIN_MESHES", "CELL_TYPES", "DIAGONALS"]
+
+#: Built-in mesh types and their dimension.
+BUILTIN_MESHES = {"interval": 1, "rectangle": 2, "box": 3}
+#: Cell types and their dimension.
+CELL_TYPES = {"interval": 1, "triangle": 2, "quadrilateral": 2, "tetrahedron": 3, "hexahedron": 3}
+#: Diagonal patterns of 2-D triangle meshes (dolfinx ``DiagonalType`` names).
+DIAGONALS = ("right", "left", "crossed", "left/right", "right/left")
+
+
+@dataclass(frozen=True)
+class MeshSpec:
+    """``[mesh]``: a built-in interval/rectangle/box mesh or a Gmsh file.
+
+    Attributes:
+        type: ``"interval"``, ``"rectangle"``, ``"box"`` or ``"gmsh"``.
+        dim: spatial dimension (1, 2 or 3).
+        lower, upper: opposite corners of a built-in mesh (``None`` for Gmsh).
+        cells: cells per direction of a built-in mesh (``None`` for Gmsh).
+        cell_type: cell type of a built-in mesh (``None`` for Gmsh).
+        diagonal: diagonal pattern of a triangle mesh (``None`` otherwise).
+        file: absolute path of the Gmsh file (``None`` for built-in meshes).
+    """
+
+    type: str
+    dim: int
+    lower: tuple[float, ...] | None = None
+    upper: tuple[float, ...] | None = None
+    cells: tuple[int, ...] | None = None
+    cell_type: str | None = None
+    diagonal: str | None = None
+    file: Path | None = None
+
+    @property
+    def builtin(self) -> bool:
+        """Whether the mesh is generated (not read from a file)."""
+        return self.type != "gmsh"
+
+    @property
+    def extent(self) -> float | None:
+        """The largest side of a built-in mesh's box (``None`` for Gmsh meshes)."""
+        if self.lower is None or self.upper is None:
+            return None
+        return max(b - a for a, b in zip(self.lower, self.upper))
+
+
+@dataclass(frozen=True)
+class PlaneSelector:
+    """Facets on the plane x[axis] = value, within ``tol`` (``None``: 1e-8 × the mesh extent)."""
+
+    axis: int
+    value: float
+    tol: float | None = None
+
+
+@dataclass(frozen=True)
+class BoxSelector:
+    """Facets whose vertices all lie in the closed box [lower, upper]."""
+
+    lower: tuple[float, ...]
+    upper: tuple[float, ...]
+
+
+@dataclass(frozen=True)
+class BoundaryPart:
+    """``[boundary.<name>]``: a named part of ∂Ω, selected by exactly one selector.
+
+    Attributes:
+        name: the part's name.
+        kind: ``"clamped"`` (Γ1), ``"traction"`` (Γ2) or ``"contact"`` (Γ3).
+        tag: Gmsh physical facet tag, or ``None``.
+        plane: plane selector, or ``None``.
+        box: box selector, or ``None``.
+        where: boolean expression in x, or ``None``.
+        traction: surface traction f_2(x, t) (traction parts only, else ``None``).
+    """
+
+    name: str
+    kind: str
+    tag: int | None = None
+    plane: PlaneSelector | None = None
+    box: BoxSelector | None = None
+    where: Expression | None = None
+    traction: tuple[Expression, ...] | None = None
+
+    @property
+    def selector(self) -> str:
+        """Which selector is set: ``"tag"``, ``"plane"``, ``"box"`` or ``"where"``."""
+        for name in ("tag", "plane", "box", "where"):
+            if getattr(self, name) is not None:
+                return name
+        return ""
+
+
+@dataclass(frozen=True)
+class PointLoad:
+    """``[[loads.point]]``: a force(t) applied at the point ``at``."""
+
+    at: tuple[float, ...]
+    force: tuple[Expression, ...]
+
+
+@dataclass(frozen=True)
+class LoadSpec:
+    """``[loads]``: body force f_0(x, t) and point loads."""
+
+    body_force: tuple[Expression, ...]
+    point: tuple[PointLoad, ...] = ()
+
+
+@dataclass(frozen=True)
+class MaterialSpec:
+    """``[material]``: Young's modulus, Poisson's ratio (``None`` in 1-D), 2-D model."""
+
+    E: float
+    nu: float | None = None
+    plane: str | None = None
+
+
+@dataclass(frozen=True)
+class LawSpec:
+    """``[law]``: σ̇ = E ε̇ + G(σ, ε).
+
+    Attributes:
+        type: ``"elastic"`` (G = 0), ``"perzyna"`` (G = -(1/μ*) E(σ - P_K σ)) or ``"linear"``
+            (G = aσ + bε).
+        scheme: ``"explicit"`` (G at the previous step) or ``"implicit"`` (at the new step).
+        sigma_y, mu_star: Perzyna's yield stress and viscosity (constants), else ``None``.
+        yield_set: Perzyna's yield set, ``"paper"`` or ``"von_mises"``, else ``None``.
+        a, b: coefficients of the linear law (constants), else ``None``.
+    """
+
+    type: str
+    scheme: str
+    sigma_y: Expression | None = None
+    mu_star: Expression | None = None
+    yield_set: str | None = None
+    a: Expression | None = None
+    b: Expression | None = None
+
+
+@dataclass(frozen=True)
+class ContactSpec:
+    """``[contact]``: the contact condition on the part named ``boundary``.
+
+    Attributes:
+        type: ``"none"``, ``"signorini"`` or ``"normal_compliance"``.
+        boundary: name of the contact part (``None`` for type none).
+        gap: initial gap g(x) (``None`` for type none or with an obstacle).
+        obstacle: level set φ(x) of a rigid obstacle {φ ≤ 0} (Signorini only), or ``None``.
+        max_distance: longest ray searched for the obstacle (with an obstacle only).
+        mu: deformability μ of the foundation (normal compliance only).
+        alpha: exponent α of normal compliance (normal compliance only).
+    """
+
+    type: str = "none"
+    boundary: str | None = None
+    gap: Expression | None = None
+    obstacle: Expression | None = None
+    max_distance: float | None = None
+    mu: float | None = None
+    alpha: float | None = None
+
+
+@dataclass(frozen=True)
+class InitialSpec:
+    """``[initial]``: u_0(x) (d components) and σ_0(x) (1, 3 or 6 components).
+
+    σ_0's components are s11 (1-D), s11 s22 s12 (2-D), s11 s22 s33 s23 s13 s12 (3-D).
+    """
+
+    u0: tuple[Expression, ...]
+    sigma0: tuple[Expression, ...]
+
+
+@dataclass(frozen=True)
+class TimeSpec:
+    """``[time]``: final time T, step k, step halvings allowed in a row."""
+
+    T: float
+    k: float
+    max_cuts: int = 12
+
+
+@dataclass(frozen=True)
+class SolverSpec:
+    """``[solver]``: Newton predictor and extra PETSc options (without the leading "-")."""
+
+    predictor: str = "linear"
+    petsc_options: dict[str, str | int | float | bool] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class OutputSpec:
+    """``[output]``: what to write, and the XDMF stride."""
+
+    xdmf: bool = True
+    contact_csv: bool = False
+    figures: bool = True
+    every: int = 1

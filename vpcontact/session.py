@@ -1,0 +1,176 @@
+# SPDX-License-Identifier: MIT
+"""One simulation of a built scene and everything it writes.
+
+Into the output folder: the XDMF series (u, stress, von Mises norm; if ``[output] xdmf``),
+``contact.csv`` (per contact node and step: u_ν, gap, pressure; if ``[output] contact_csv``),
+PNG figures of the final state and of the contact history (if ``[output] figures``) and always
+``summary.json``: versions, scene hash, steps, Newton iterations, rejected steps with their
+converged reasons, wall-time split and active-set sizes. A run that fails after its budget of
+step halvings keeps the completed steps and is marked ``"completed": false``.
+"""
+
+from __future__ import annotations
+
+import json
+import platform
+import sys
+import time
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+from mpi4py import MPI
+
+from vpcontact import plots, runner
+from vpcontact.build import Model
+from vpcontact.output import ContactHistory
+from vpcontact.signorini import Signorini, contact_dofs
+
+
+class Session:
+    """Run ``model`` to its final time, writing into ``out``."""
+
+    def __init__(self, model: Model, out: Path, progress: bool = True):
+        self.model = model
+        self.out = Path(out)
+        self.comm = model.problem.mesh.comm
+        self.show_progress = progress
+        self._bar = _ProgressBar(model.scene.time.T) if progress and self.comm.rank == 0 else None
+
+    def run(self) -> int:
+        """Simulate; return the exit status (0 completed, 1 failed with outputs kept)."""
+        scene, problem = self.model.scene, self.model.problem
+        history = self._history()
+        start = time.perf_counter()
+        record = None
+        error: Optional[Exception] = None
+        try:
+            record, history, cells = runner.run(
+                problem, scene.time.T, scene.time.k, out=self.out, name=scene.name,
+                xdmf=scene.output.xdmf, verbose=False, max_cuts=scene.time.max_cuts,
+                history=history, csv_name="contact.csv", progress=self._progress,
+                xdmf_every=scene.output.every)
+        except Exception as err:  # re-raised below once the summary is on disk
+            error = err
+        if self._bar is not None:
+            self._bar.close()
+        wall = time.perf_counter() - start
+        self._write_summary(record, wall, error)
+        if record is None or error is not None:
+            raise error
+        if scene.output.figures:
+            self._figures(history, cells)
+        self.comm.barrier()  # rank 0 has written every file
+        if self.comm.rank == 0:
+            steps = len(record.times)
+            print(f"{scene.name}: t = {record.times[-1]:.4g} in {steps} steps, "
+                  f"{sum(record.newton_iterations)} Newton iterations, {len(record.cuts)} rejected, "
+                  f"{wall:.1f} s on {self.comm.size} rank(s); outputs in {self.out.resolve()}")
+        return 0
+
+    def _history(self) -> Optional[ContactHistory]:
+        """Contact nodes to record: Signorini's own, or normal compliance's on a planar Γ3."""
+        scene, problem = self.model.scene, self.model.problem
+        wanted = scene.output.contact_csv or scene.output.figures
+        if not wanted or scene.contact is None or scene.contact.type == "none":
+            return None
+        if scene.contact.type == "signorini":
+            return ContactHistory(problem)
+        law = problem.contact
+        gap = scene.contact.gap
+        spec = Signorini(law.tag, gap=0.0 if gap is None or gap.is_constant and gap.value() == 0
+                         else (lambda x: gap.numpy(x)))
+        clamped = problem.bcs[0].dof_indices()[0]
+        cdofs = contact_dofs(problem.V, self.model.facet_tags, spec, exclude=clamped)
+
+        def pressure(u):
+            penetration = np.maximum(cdofs.normal_displacement(u) - cdofs.gap, 0.0)
+            return -(penetration ** law.alpha) / law.mu
+
+        return ContactHistory(problem, cdofs, pressure)
+
+    def _progress(self, step, report) -> None:
+        if self._bar is not None:
+            active = report.active if report is not None else None
+            self._bar.update(step.time, step.newton_iterations, active)
+
+    def _figures(self, history, cells) -> None:
+        scene, problem = self.model.scene, self.model.problem
+        if scene.dim >= 2:
+            plots.deformed_configuration(self.out / "final_state.png", problem.u, cells.von_mises,
+                                         f"{scene.name}: von Mises norm at t = {scene.time.T:g}")
+        if history is not None and scene.dim >= 2:
+            axis = 0
+            line = (1, 0.5 * sum(_bounds(problem, 1))) if scene.dim == 3 else None
+            plots.contact_evolution(self.out / "contact_history.png", history, axis=axis,
+                                    title=f"{scene.name}: normal displacement of the contact nodes",
+                                    line=line, obstacle=scene.contact.type == "signorini")
+
+    def _write_summary(self, record, wall: float, error: Optional[Exception]) -> None:
+        scene, problem = self.model.scene, self.model.problem
+        solver = problem.solver
+        summary = {
+            "scene": {"name": scene.name, "path": str(scene.path), "sha256": scene.hash},
+            "versions": _versions(),
+            "mpi_ranks": self.comm.size,
+            "completed": bool(record is not None and record.completed and error is None),
+            "error": None if error is None else str(error),
+            "steps": 0 if record is None else len(record.times),
+            "final_time": None if record is None or not record.times else record.times[-1],
+            "newton_iterations": [] if record is None else record.newton_iterations,
+            "newton_iterations_total": solver.total_iterations,
+            "converged_reasons": "every accepted step converged (SNES reason > 0)",
+            "rejected_steps": [] if record is None else [
+                {"time": c.time, "dt": c.dt, "reason": c.reason} for c in record.cuts],
+            "active_contact_nodes": [] if record is None else [c.active for c in record.contact],
+            "wall_time_s": wall,
+            "wall_time_split_s": dict(solver.timings),
+            "jacobian_assemblies": solver.jacobian_assemblies,
+            "kernel_calls": solver.kernel_calls,
+            "vi_solves": solver.vi_solves,
+        }
+        if self.comm.rank == 0:
+            self.out.mkdir(parents=True, exist_ok=True)
+            (self.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        self.comm.barrier()  # the summary is on disk when any rank returns
+
+
+def _bounds(problem, axis: int):
+    x = problem.mesh.geometry.x[:, axis]
+    comm = problem.mesh.comm
+    return comm.allreduce(float(x.min()), op=MPI.MIN), comm.allreduce(float(x.max()), op=MPI.MAX)
+
+
+def _versions() -> dict:
+    import dolfinx
+    from petsc4py import PETSc
+    from vpcontact import __version__
+    return {"vpcontact": __version__, "dolfinx": dolfinx.__version__,
+            "petsc": ".".join(map(str, PETSc.Sys.getVersion())), "python": sys.version.split()[0],
+            "platform": platform.platform()}
+
+
+class _ProgressBar:
+    """One line on a terminal, rewritten each step; a line every 10 % of T otherwise."""
+
+    def __init__(self, t_final: float, width: int = 30):
+        self.t_final = t_final
+        self.width = width
+        self.tty = sys.stdout.isatty()
+        self._next = 0.1
+
+    def update(self, t: float, its: int, active: Optional[int]) -> None:
+        frac = min(t / self.t_final, 1.0)
+        contact = f"  active contact nodes {active}" if active is not None else ""
+        text = (f"[{'#' * int(frac * self.width):{self.width}s}] {100 * frac:5.1f}%  t = {t:.4g}"
+                f"  Newton its {its}{contact}")
+        if self.tty:
+            print("\r" + text, end="", flush=True)
+        elif frac >= self._next - 1e-12 or frac >= 1.0:
+            print(text, flush=True)
+            while self._next <= frac + 1e-12:
+                self._next += 0.1
+
+    def close(self) -> None:
+        if self.tty:
+            print(flush=True)
