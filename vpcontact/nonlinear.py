@@ -110,7 +110,8 @@ class StepSolver:
         self.snes.setOptionsPrefix(self.prefix)
         opts = PETSc.Options()
         opts.prefixPush(self.prefix)
-        for key, value in {**DEFAULT_OPTIONS, **(petsc_options or {})}.items():
+        self._options = {**DEFAULT_OPTIONS, **(petsc_options or {})}
+        for key, value in self._options.items():
             opts[key] = value
         self._stall_rtol = float(opts.getReal(self.prefix + "vpcontact_stall_rtol"))
         self._force_rtol = float(opts.getReal(self.prefix + "vpcontact_force_rtol"))
@@ -155,10 +156,17 @@ class StepSolver:
             vec.array[finite] /= self.scale
         self._bounds = (lower, upper)
         self.snes.setVariableBounds(lower, upper)
+        # Same options under "<prefix>free_", except the type (and the VI's line search).
+        free_prefix = self.prefix + "free_"
+        opts = PETSc.Options()
+        for key, value in self._options.items():
+            opts[free_prefix + key] = value
+        opts[free_prefix + "snes_type"] = "newtonls"
+        if self.snes.getType() != "newtonls" and "snes_linesearch_type" not in self._options:
+            opts[free_prefix + "snes_linesearch_type"] = "basic"
         self._free_snes = PETSc.SNES().create(self.u.function_space.mesh.comm)
-        self._free_snes.setOptionsPrefix(self.prefix)
+        self._free_snes.setOptionsPrefix(free_prefix)
         self._setup(self._free_snes)
-        self._free_snes.setType("newtonls")
 
     def _feasible(self, x: PETSc.Vec) -> bool:
         """x within the bounds (to 1e-6 in units of x, i.e. round-off in physical units)."""
