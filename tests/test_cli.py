@@ -184,6 +184,9 @@ def test_bundled_scene_runs_and_writes_its_outputs(shared_tmp_path, name, cells,
     assert summary["scene"]["sha256"] == scenes.load(path).hash
     for f in (f"{name}.xdmf", "contact.csv", "final_state.png", "contact_history.png"):
         assert (out / f).exists(), f
+    assert len(summary["converged_reasons"]) == summary["steps"]
+    assert all(r.startswith("CONVERGED") for r in summary["converged_reasons"])
+    assert "contact_pressure" in (out / f"{name}.xdmf").read_text()
     values = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
     assert np.isfinite(values).all() and (values[:, 6] <= 1e-8).all()  # compressive only
 

@@ -128,6 +128,7 @@ class StepSolver:
         self._loaded_valid = False
         self.total_iterations = 0
         self.jacobian_assemblies = 0
+        self.last_reason = ""  # converged reason of the last successful solve
         self.vi_solves = 0  # SNES VI runs (Signorini steps not settled by plain Newton)
         self.kernel_calls = 0
         #: wall time [s] spent in the refresh hook (kernels), residual and Jacobian assembly,
@@ -292,6 +293,7 @@ class StepSolver:
             ksp_reason = snes.getKSP().getConvergedReason()
             detail = f"last linear solve reason {ksp_reason}" if ksp_reason < 0 else ""
             raise ConvergenceError(reason_name(reason), its, time, step, detail)
+        self.last_reason = reason_name(reason)
         return its
 
     def _run(self, snes: PETSc.SNES) -> tuple[int, int]:

@@ -72,9 +72,10 @@ class CellStress:
 class XdmfSeries:
     """XDMF time series (for ParaView) of displacement, stress and von Mises norm."""
 
-    def __init__(self, path: str | Path, u: fem.Function, cell_stress: CellStress):
+    def __init__(self, path: str | Path, u: fem.Function, cell_stress: CellStress, extra=()):
         mesh = u.function_space.mesh
         self.u = u
+        self.extra = list(extra)  # (Function, refresh()) written after the built-in fields
         self.cells = cell_stress
         self._u_out = u
         degree = u.function_space.ufl_element().degree()
@@ -91,6 +92,9 @@ class XdmfSeries:
         self.file.write_function(self._u_out, t)
         self.file.write_function(self.cells.stress, t)
         self.file.write_function(self.cells.von_mises, t)
+        for function, refresh in self.extra:
+            refresh()
+            self.file.write_function(function, t)
 
     def close(self) -> None:
         self.file.close()
@@ -119,15 +123,17 @@ class ContactHistory:
         self.normal_displacement: list[np.ndarray] = []
         self.pressure: list[np.ndarray] = []
 
+    def local_pressure(self) -> np.ndarray:
+        """Nodal σ_ν at this rank's contact nodes (collective for Signorini)."""
+        if self._pressure is not None:
+            return self._pressure(self.problem.u)
+        mon = self.problem.contact_monitor
+        return mon.nodal_forces() / mon.weights
+
     def record(self, t: float) -> None:
         cd = self.cdofs
-        if self._pressure is not None:
-            local = self._pressure(self.problem.u)
-        else:
-            mon = self.problem.contact_monitor
-            local = mon.nodal_forces() / mon.weights
         un = _gather(self.comm, cd.normal_displacement(self.problem.u))
-        p = _gather(self.comm, local)
+        p = _gather(self.comm, self.local_pressure())
         if self.comm.rank == 0:
             self.times.append(t)
             self.normal_displacement.append(un)

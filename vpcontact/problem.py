@@ -38,6 +38,7 @@ class StepReport:
     step: int
     time: float
     newton_iterations: int
+    reason: str = ""  # SNES converged reason, e.g. CONVERGED_FNORM_RELATIVE
 
 
 @dataclass(frozen=True)
@@ -204,7 +205,7 @@ class QuasistaticProblem:
         self._contact_active = self._any_contact_active()
         self._u_prev, self._dt_prev = u_old, dt
         self.step_index = n
-        report = StepReport(n, t_new, its)
+        report = StepReport(n, t_new, its, self.solver.last_reason)
         self.reports.append(report)
         return report
 

@@ -20,6 +20,7 @@ class RunRecord:
 
     times: list = field(default_factory=list)
     newton_iterations: list = field(default_factory=list)
+    reasons: list = field(default_factory=list)      # SNES converged reason per step
     contact: list = field(default_factory=list)      # ContactReport per step (Signorini)
     cuts: list = field(default_factory=list)         # stepping.Cut per rejected step
     completed: bool = False                          # reached t_final
@@ -30,7 +31,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         name: str = "result", xdmf: bool = True, verbose: bool = True,
         max_cuts: int = 12, history: Optional[ContactHistory] = None,
         csv_name: str = "contact_history.csv", progress=None, xdmf_every: int = 1,
-        ) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
+        xdmf_extra=()) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
     """Advance ``problem`` to ``t_final`` with steps of at most ``dt``, writing outputs into ``out``.
 
     A step that does not converge is rejected and retried with half the step, at most
@@ -39,7 +40,8 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
 
     ``history`` records the contact nodes (default: a Signorini problem's); ``progress(step,
     report)`` is called after every accepted step on every rank; the XDMF series gets every
-    ``xdmf_every``-th step and the last one.
+    ``xdmf_every``-th step and the last one, with the fields ``xdmf_extra`` ((Function, refresh)
+pairs) besides u, stress and von Mises norm.
 
     Returns the run record, the contact history (Signorini problems) and the cell stress fields.
     """
@@ -52,7 +54,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
             Path(out).mkdir(parents=True, exist_ok=True)
         comm.barrier()
     if out is not None and xdmf:
-        series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells)
+        series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells, extra=xdmf_extra)
     if history is None and problem.contact_dofs is not None:
         history = ContactHistory(problem)
     record = RunRecord()
@@ -63,6 +65,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         for step in advance(problem, t_final, control):
             record.times.append(step.time)
             record.newton_iterations.append(step.newton_iterations)
+            record.reasons.append(step.reason)
             report: Optional[ContactReport] = None
             if problem.contact_monitor is not None:
                 report = problem.contact_monitor.report()

@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import Optional
 
 import numpy as np
+from dolfinx import fem
 from mpi4py import MPI
 
 from vpcontact import plots, runner
@@ -49,7 +50,7 @@ class Session:
                 problem, scene.time.T, scene.time.k, out=self.out, name=scene.name,
                 xdmf=scene.output.xdmf, verbose=False, max_cuts=scene.time.max_cuts,
                 history=history, csv_name="contact.csv", progress=self._progress,
-                xdmf_every=scene.output.every)
+                xdmf_every=scene.output.every, xdmf_extra=self._pressure_field(history))
         except Exception as err:  # re-raised below once the summary is on disk
             error = err
         if self._bar is not None:
@@ -89,6 +90,22 @@ class Session:
 
         return ContactHistory(problem, cdofs, pressure)
 
+    def _pressure_field(self, history):
+        """Nodal contact pressure σ_ν as a P1 field (zero off Γ3), for P1 displacements."""
+        problem = self.model.problem
+        if history is None or problem.V.ufl_element().degree() != 1:
+            return ()
+        field = fem.Function(fem.FunctionSpace(problem.mesh, ("Lagrange", 1)),
+                             name="contact_pressure")
+        bs = problem.V.dofmap.index_map_bs
+        nodes = history.cdofs.dofs // bs  # vector P1 dof -> its node (the scalar P1 dof)
+
+        def refresh():
+            field.x.array[nodes] = history.local_pressure()
+            field.x.scatter_forward()
+
+        return [(field, refresh)]
+
     def _progress(self, step, report) -> None:
         if self._bar is not None:
             active = report.active if report is not None else None
@@ -119,7 +136,7 @@ class Session:
             "final_time": None if record is None or not record.times else record.times[-1],
             "newton_iterations": [] if record is None else record.newton_iterations,
             "newton_iterations_total": solver.total_iterations,
-            "converged_reasons": "every accepted step converged (SNES reason > 0)",
+            "converged_reasons": [] if record is None else record.reasons,
             "rejected_steps": [] if record is None else [
                 {"time": c.time, "dt": c.dt, "reason": c.reason} for c in record.cuts],
             "active_contact_nodes": [] if record is None else [c.active for c in record.contact],
