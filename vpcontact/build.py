@@ -73,11 +73,7 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
 def _mesh(scene: Scene, comm):
     spec = scene.mesh
     if spec.type == "gmsh":
-        from dolfinx.io import gmshio
-        try:
-            mesh, _, facet_tags = gmshio.read_from_msh(str(spec.file), comm, gdim=spec.dim)
-        except Exception as err:  # gmsh reports bad files in many ways
-            raise scene.error("mesh.file", f"cannot read the Gmsh file: {err}") from None
+        mesh, facet_tags = _read_gmsh(scene, comm)
         return mesh, facet_tags
     cell = _CELL_TYPES[spec.cell_type]
     lower, upper = np.array(spec.lower, dtype=float), np.array(spec.upper, dtype=float)
@@ -88,6 +84,38 @@ def _mesh(scene: Scene, comm):
         return dmesh.create_rectangle(comm, [lower, upper], list(spec.cells), cell,
                                       diagonal=diagonal), None
     return dmesh.create_box(comm, [lower, upper], list(spec.cells), cell), None
+
+
+def _read_gmsh(scene: Scene, comm):
+    """Mesh and facet tags of a .msh file, read on rank 0 and distributed.
+
+    (dolfinx 0.5's ``gmshio.read_from_msh`` is broken; ``model_to_mesh`` is used directly.) Rank 0
+    checks the file first and shares the verdict, so a bad file fails on every rank together.
+    """
+    import gmsh
+    from dolfinx.io import gmshio
+    problem = None
+    if comm.rank == 0:
+        gmsh.initialize(["-v", "0"])
+        try:
+            gmsh.model.add("scene")
+            gmsh.merge(str(scene.mesh.file))
+            if not gmsh.model.getPhysicalGroups(scene.mesh.dim):
+                problem = (f"the Gmsh file has no physical group of dimension {scene.mesh.dim} "
+                           "(the cells to use)")
+        except Exception as err:  # gmsh raises plain Exceptions for unreadable files
+            problem = f"cannot read the Gmsh file: {err}"
+    problem = comm.bcast(problem, root=0)
+    if problem is not None:
+        if comm.rank == 0:
+            gmsh.finalize()
+        raise scene.error("mesh.file", problem)
+    try:
+        mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=scene.mesh.dim)
+    finally:
+        if comm.rank == 0:
+            gmsh.finalize()
+    return mesh, facet_tags
 
 
 def _boundary_parts(scene: Scene, mesh, gmsh_tags):

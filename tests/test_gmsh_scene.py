@@ -1,0 +1,115 @@
+# SPDX-License-Identifier: MIT
+"""Scenes on Gmsh meshes: boundary parts by physical tag, and a located error for a missing tag."""
+
+import re
+
+import gmsh  # python3-gmsh; scripts/setup.sh installs it
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from vpcontact import cli
+from vpcontact import scene as scenes
+from vpcontact.build import build
+
+LEFT, RIGHT, BOTTOM, BODY = 1, 2, 3, 10
+
+
+def _rectangle_msh(path):
+    """A 2 × 1 rectangle meshed by Gmsh; physical lines 1 (x = 0), 2 (x = 2), 3 (y = 0)."""
+    if MPI.COMM_WORLD.rank == 0:
+        gmsh.initialize(["-v", "0"])
+        gmsh.model.add("rectangle")
+        surface = gmsh.model.occ.addRectangle(0.0, 0.0, 0.0, 2.0, 1.0)
+        gmsh.model.occ.synchronize()
+        lines = {}
+        for dim, tag in gmsh.model.getBoundary([(2, surface)], oriented=False):
+            x, y, _ = gmsh.model.occ.getCenterOfMass(dim, tag)
+            lines[(round(x, 6), round(y, 6))] = tag
+        gmsh.model.addPhysicalGroup(1, [lines[(0.0, 0.5)]], LEFT)
+        gmsh.model.addPhysicalGroup(1, [lines[(2.0, 0.5)]], RIGHT)
+        gmsh.model.addPhysicalGroup(1, [lines[(1.0, 0.0)]], BOTTOM)
+        gmsh.model.addPhysicalGroup(2, [surface], BODY)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", 0.2)
+        gmsh.model.mesh.generate(2)
+        gmsh.write(str(path))
+        gmsh.finalize()
+    MPI.COMM_WORLD.barrier()
+
+
+SCENE = """\
+name = "gmsh_block"
+[mesh]
+type = "gmsh"
+file = "block.msh"
+dim = 2
+
+[boundary.clamp]
+kind = "clamped"
+tag = 1
+
+[boundary.end]
+kind = "traction"
+tag = 2
+traction = [0.0, "-1e3*t"]
+
+[boundary.floor]
+kind = "contact"
+tag = {floor_tag}
+
+[material]
+E = 1e8
+nu = 0.3
+
+[contact]
+type = "normal_compliance"
+boundary = "floor"
+mu = 1e-7
+
+[time]
+T = 1.0
+k = 0.25
+"""
+
+
+def _write(folder, floor_tag):
+    path = folder / "block.toml"
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(SCENE.format(floor_tag=floor_tag))
+    MPI.COMM_WORLD.barrier()
+    return path
+
+
+def test_gmsh_scene_runs_with_tagged_parts(shared_tmp_path):
+    _rectangle_msh(shared_tmp_path / "block.msh")
+    model = build(scenes.load(_write(shared_tmp_path, BOTTOM)))
+    comm = MPI.COMM_WORLD
+    floor = model.facet_tags.find(model.part_tags["floor"])
+    length = comm.allreduce(len(floor), op=MPI.SUM)
+    assert length >= 10, "the bottom line carries about 2 / 0.2 facets"
+    for _ in range(4):
+        model.problem.step(0.25)
+    u = model.problem.u.x.array.reshape(-1, 2)
+    low = comm.allreduce(float(u[:, 1].min()), op=MPI.MIN)
+    assert low < 0.0 and np.isfinite(u).all()
+
+
+def test_missing_gmsh_tag_is_reported_at_its_part(shared_tmp_path, capsys):
+    _rectangle_msh(shared_tmp_path / "block.msh")
+    path = _write(shared_tmp_path, 7)
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        line = 1 + path.read_text().splitlines().index("[boundary.floor]")
+        assert re.search(rf"{re.escape(str(path))}:{line}: boundary.floor: .*tag 7 marks no boundary facet", err), err
+    assert not out.exists()
+
+
+def test_unreadable_gmsh_file_is_a_located_error(shared_tmp_path):
+    if MPI.COMM_WORLD.rank == 0:
+        (shared_tmp_path / "block.msh").write_text("this is not a mesh\n")
+    MPI.COMM_WORLD.barrier()
+    scene = scenes.load(_write(shared_tmp_path, BOTTOM))
+    with pytest.raises(scenes.SceneError, match=r"block.toml:4: mesh.file: "):
+        build(scene)
