@@ -18,8 +18,8 @@ Newton's Jacobian is J_c(u; du, v) = ∫_Γ3 (1/μ) k(p) du_ν v_ν da with the 
 
 * α = 1: k = H(p), the exact derivative of the piecewise linear p_+ (zero at p = 0 itself: the
   inactive branch, as ``ufl.derivative`` of ``max_value`` gives), and δ plays no role.
-* α < 1: the true slope α p^(α-1) is unbounded as p → 0+ (infinite at a quadrature point with a
-  denormal penetration, a matrix entry that swamps the elastic ones long before that). Evaluating
+* α < 1: the true slope α p^(α-1) is unbounded as p → 0+ (at a denormal p it overflows to inf
+  for α < 0.05, and it swamps the elastic matrix entries long before that). Evaluating
   it at max(p, δ) caps it at α δ^(α-1) and leaves it exact wherever p ≥ δ. The Jacobian is thus
   finite and symmetric for every iterate, and the exact residual is what Newton drives to zero,
   so the converged state is the true discrete solution; only the iteration changes, and only at
@@ -28,8 +28,8 @@ Newton's Jacobian is J_c(u; du, v) = ∫_Γ3 (1/μ) k(p) du_ν v_ν da with the 
   conditional.
 
 The floor δ is a length (a penetration). Default: δ = 1e-12 h_T, h_T the diameter of the cell
-the facet belongs to, i.e. the size of the unit the step solver works in (2^-40 of the mesh
-extent): far below any penetration that matters — with E = 1e8 and loads of order 10, the
+the facet belongs to; this is about the length unit the step solver works in (2^-40 ≈ 1e-12
+times the mesh extent, chosen there as far below any displacement of interest). It is far below any penetration that matters — with E = 1e8 and loads of order 10, the
 displacements of the paper's tests are 1e-7 or more — so the Jacobian is exact at the converged
 state wherever the foundation carries a non-negligible force, and Newton converges quadratically;
 and still far above the round-off of p = u_ν - g (about 1e-16 max(|u_ν|, g)), so the cap is
@@ -38,8 +38,9 @@ absolute units instead.
 
 Two limits of α < 1 that no Jacobian removes:
 
-* The law p ↦ p^α is concave. From an iterate that penetrates more than the solution by a factor
-  (1 - α)^(-1/α) (≥ e) or more, a full Newton step overshoots past p = 0, and the next step
+* The law p ↦ p^α is concave. In a one-point model (body stiffness k, load F), from an iterate
+  that penetrates more than the solution by a factor (1 - α)^(-1/α) (≥ e), a full Newton step
+  overshoots past p = 0, and the next step
   (contact slope 0) returns to the unsupported prediction: full Newton steps can cycle at contact
   onset when the foundation is several times stiffer than the body. A line search
   (``snes_linesearch_type: bt``) damps the overshoot; QuasistaticProblem uses ``l2`` for

@@ -53,6 +53,15 @@ def reason_name(reason: int) -> str:
     return _REASONS.get(reason, f"UNKNOWN({reason})")
 
 
+def _forget(prefix: str, keys) -> None:
+    """Remove options this module put into PETSc's database once a solver has read them (the
+    database holds at most 512 entries per process, and solvers are created many times)."""
+    opts = PETSc.Options()
+    for key in keys:
+        if opts.hasName(prefix + key):
+            opts.delValue(prefix + key)
+
+
 class StepSolver:
     """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
 
@@ -121,6 +130,7 @@ class StepSolver:
         if not 0.0 < self._stall_rtol < 1.0:
             raise ValueError(f"vpcontact_stall_rtol must be in (0, 1), got {self._stall_rtol}")
         self._setup(self.snes)
+        _forget(self.prefix, self._options)
         self._free_snes: Optional[PETSc.SNES] = None  # unconstrained Newton of a VI problem
         self._bounds = None
         self._fnorm0 = 0.0
@@ -168,6 +178,7 @@ class StepSolver:
         self._free_snes = PETSc.SNES().create(self.u.function_space.mesh.comm)
         self._free_snes.setOptionsPrefix(free_prefix)
         self._setup(self._free_snes)
+        _forget(free_prefix, {**self._options, "snes_type": 0, "snes_linesearch_type": 0})
 
     def _feasible(self, x: PETSc.Vec) -> bool:
         """x within the bounds (to 1e-6 in units of x, i.e. round-off in physical units)."""

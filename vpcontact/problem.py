@@ -21,6 +21,7 @@ import ufl
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
+from vpcontact.contact import NormalCompliance
 from vpcontact.errors import InputError, NonFiniteStateError
 from vpcontact.nonlinear import StepSolver
 from vpcontact.quadrature import QuadratureState
@@ -127,6 +128,9 @@ class QuasistaticProblem:
             # Stiff elastic (E ~ 1e8) against soft viscous (μ*/k) branches: full Newton steps
             # overshoot where points unload; the l2 line search restores convergence.
             defaults["snes_linesearch_type"] = "l2"
+        elif isinstance(contact, NormalCompliance) and contact.alpha < 1.0:
+            # p ↦ p^α is concave: full steps can overshoot past contact onset and cycle.
+            defaults["snes_linesearch_type"] = "bt"
         if isinstance(contact, Signorini):
             defaults["snes_type"] = "vinewtonrsls"
         elif contact is not None:
