@@ -208,6 +208,20 @@ def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, cap
         assert "the simulation failed" in capsys.readouterr().err
 
 
+def test_explicit_scene_beyond_its_stability_limit_is_refused(shared_tmp_path, capsys):
+    path = _small("signorini_2d", shared_tmp_path, "[4, 4]", 1.0, 0.5)
+    text = path.read_text().replace('scheme = "implicit"', 'scheme = "explicit"')
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text)
+    MPI.COMM_WORLD.barrier()
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(path), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert re.search(r":\d+: time.k: k = 0.5 exceeds the stability limit 2.8e-06", err), err
+    assert not out.exists()
+
+
 def test_perzyna_scene_builds_the_viscoplastic_law():
     model = build(scenes.load(scenes.resolve("signorini_2d")))
     assert isinstance(model.problem.law, Perzyna)

@@ -55,6 +55,11 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
     mesh, gmsh_tags = _mesh(scene, comm)
     part_tags, facet_tags = _boundary_parts(scene, mesh, gmsh_tags)
     law = _law(scene)
+    limit = law.explicit_step_limit()
+    if scene.time.k > limit:
+        raise scene.error("time.k", f"k = {scene.time.k:g} exceeds the stability limit "
+                          f"{limit:.4g} of the explicit scheme (2/L from the law's data); use "
+                          "scheme = \"implicit\" or a smaller k")
     loads = _loads(scene, part_tags)
     contact, contact_tag = _contact(scene, part_tags, mesh)
     clamped = [part_tags[n] for n, p in scene.boundaries.items() if p.kind == "clamped"]

@@ -76,6 +76,13 @@ class LinearRate:
         """The update is affine in ε_n, so Newton needs one iteration without contact."""
         return True
 
+    def explicit_step_limit(self) -> float:
+        """Largest stable explicit step: σ is multiplied by (1 + k a) per step, so k < 2/|a|
+        for a < 0 (inf for the implicit scheme or a ≥ 0, where nothing oscillates)."""
+        if self.scheme == "implicit" or self.a >= 0:
+            return math.inf
+        return 2.0 / abs(self.a)
+
     def update(self, stress_old, strain_old, strain_new, dt, stress_out, tangent_out) -> None:
         """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout)."""
         el = self.elasticity
@@ -108,6 +115,16 @@ class Perzyna:
     @property
     def linear_in_strain(self) -> bool:
         return self.scheme == "explicit"
+
+    def explicit_step_limit(self) -> float:
+        """Largest stable step of the explicit scheme, 2 μ* / λ_max(E) (inf if implicit).
+
+        Inside K the update is elastic; outside it, σ - P_K σ is damped by (I - (k/μ*) E)
+        per step in the energy norm, which stays a contraction only for k < 2μ*/λ_max(E).
+        """
+        if self.scheme == "implicit":
+            return math.inf
+        return 2.0 * self.mu_star / float(np.linalg.eigvalsh(self.elasticity.matrix()).max())
 
     def update(self, stress_old, strain_old, strain_new, dt, stress_out, tangent_out) -> None:
         """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout)."""

@@ -13,6 +13,7 @@ current Newton iterate; the Jacobian uses their consistent tangent dσ_n/dε_n.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from typing import Callable, Dict, List, Optional, Sequence
 
@@ -81,9 +82,13 @@ class QuasistaticProblem:
 
     def __init__(self, mesh, facet_tags, law, clamped_tag: int, loads: Loads = Loads(),
                  contact=None, degree: int = 1, petsc_options: Optional[dict] = None,
-                 options_prefix: Optional[str] = None, predictor: str = "linear"):
+                 options_prefix: Optional[str] = None, predictor: str = "linear",
+                 unstable_steps: str = "error"):
         if predictor not in ("linear", "none"):
             raise InputError(f"predictor must be 'linear' or 'none', got {predictor!r}")
+        if unstable_steps not in ("error", "warn"):
+            raise InputError(f"unstable_steps must be 'error' or 'warn', got {unstable_steps!r}")
+        self.unstable_steps = unstable_steps
         self.predictor = predictor
         self.mesh = mesh
         self.law = law
@@ -183,6 +188,7 @@ class QuasistaticProblem:
         """Advance from t_{n-1} to t_n = t_{n-1} + dt; on failure the state is rolled back."""
         if not dt > 0:
             raise InputError(f"time step must be > 0, got {dt}")
+        self._check_stability(dt)
         t_new = float(self.time.value) + dt
         n = self.step_index + 1
         u_old = self.u.x.array.copy()
@@ -212,6 +218,19 @@ class QuasistaticProblem:
         report = StepReport(n, t_new, its, self.solver.last_reason)
         self.reports.append(report)
         return report
+
+    def _check_stability(self, dt: float) -> None:
+        """Refuse (or warn about) an explicit step beyond the law's stability limit."""
+        limit = self.law.explicit_step_limit()
+        if dt <= limit:
+            return
+        message = (f"time step {dt:.4g} exceeds the stability limit {limit:.4g} of the explicit "
+                   f"scheme (2/L from the law's data); use the implicit scheme or k <= {limit:.4g}")
+        if self.unstable_steps == "error":
+            raise InputError(message)
+        if not getattr(self, "_warned_unstable", False):
+            warnings.warn(message, RuntimeWarning, stacklevel=3)
+            self._warned_unstable = True
 
     def _point_forces(self):
         t = float(self.time.value)
