@@ -83,7 +83,8 @@ class Expression:
 
     def ufl(self, x, t):
         """The expression in UFL (a condition for boolean expressions)."""
-        return _Lower(x, t, numpy=False).visit(self.tree)
+        out = _Lower(x, t, numpy=False).visit(self.tree)
+        return ufl.as_ufl(out) if isinstance(out, float) else out
 
     def value(self, t: float = 0.0) -> float:
         """The value of an expression without x."""
