@@ -233,7 +233,8 @@ def check_parts(report: Report, parts: dict[str, BoundaryPart], contact: Contact
             why = ("the scene has no [contact] section" if not has_contact_table
                    else "contact.type is 'none'")
             report.add(where, f"boundary part {name!r} has kind 'contact' but {why}")
-        elif contact.boundary is not None and contact.boundary != name:
+        elif contact.boundary in parts and contact.boundary != name:  # (a missing name is
+            # reported once, at contact.boundary)
             report.add(where, f"only one contact part is supported, and contact.boundary names "
                               f"{contact.boundary!r}")
     if contact.type != "none" and contact.boundary is not None:
