@@ -17,7 +17,7 @@ from mpi4py import MPI
 from vpcontact import bar1d, cli
 from vpcontact import scene as scenes
 from vpcontact.build import build
-from vpcontact.constitutive import LinearRate, Perzyna
+from vpcontact.constitutive import LinearRate, Perzyna, PlaneStrain
 
 
 def _small(name: str, folder: Path, cells: str, T: float, k: float, extra: str = "") -> Path:
@@ -220,6 +220,18 @@ def test_explicit_scene_beyond_its_stability_limit_is_refused(shared_tmp_path, c
     if MPI.COMM_WORLD.rank == 0:
         assert re.search(r":\d+: time.k: k = 0.5 exceeds the stability limit 2.8e-06", err), err
     assert not out.exists()
+
+
+def test_plane_strain_scene_runs_the_3d_law_in_the_plane(shared_tmp_path):
+    path = _small("elastic_2d", shared_tmp_path, "[8, 2]", 1.0, 0.5)
+    text = path.read_text().replace("nu = 0.3", 'nu = 0.3\nplane = "strain"')
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text)
+    MPI.COMM_WORLD.barrier()
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    assert isinstance(build(scenes.load(path)).problem.law, PlaneStrain)
+    assert _summary(out)["completed"]
 
 
 def test_perzyna_scene_builds_the_viscoplastic_law():

@@ -20,7 +20,7 @@ import ufl
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
-from vpcontact.constitutive import Elastic, Elasticity, LinearRate, Perzyna
+from vpcontact.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
 from vpcontact.contact import NormalCompliance
 from vpcontact.errors import InputError
 from vpcontact.problem import Loads, PointLoad, QuasistaticProblem
@@ -181,13 +181,18 @@ def _merge_clamped(mesh, tags, clamped):
 
 def _law(scene: Scene):
     spec, mat, dim = scene.law, scene.material, scene.dim
-    if dim == 2 and mat.plane == "strain":
-        raise scene.error("material.plane", "plane strain is not supported yet (the kernels "
-                          "implement plane stress in 2-D); use plane = \"stress\" or a 3-D mesh")
-    model = {1: "1d", 2: "plane_stress", 3: "3d"}[dim]
-    if dim == 3 and spec.type == "perzyna" and spec.yield_set == "von_mises":
+    strain = dim == 2 and mat.plane == "strain"
+    if dim == 3:  # "paper": the set printed in §4.1.2; "von_mises": the standard one
+        model = "3d_standard" if spec.yield_set == "von_mises" else "3d"
+    elif strain:  # a 3-D law with ε33 = 0, with the standard von Mises set
         model = "3d_standard"
-    elasticity = Elasticity(model, mat.E, mat.nu if mat.nu is not None else 0.0)
+    else:
+        model = {1: "1d", 2: "plane_stress"}[dim]
+    law = _law3(spec, Elasticity(model, mat.E, mat.nu if mat.nu is not None else 0.0))
+    return PlaneStrain(law) if strain else law
+
+
+def _law3(spec, elasticity):
     if spec.type == "elastic":
         return Elastic(elasticity)
     if spec.type == "linear":

@@ -132,3 +132,59 @@ class Perzyna:
         kernels.stress_update_mandel(
             stress_old, strain_old, strain_new, dt=dt, E=el.E, nu=el.nu, sigma_y=self.sigma_y,
             mu_star=self.mu_star, model=el.model, scheme=self.scheme, out=(stress_out, tangent_out))
+
+
+class PlaneStrain:
+    """A 3-D law on a 2-D mesh in plane strain: ε33 = ε13 = ε23 = 0, σ33 free.
+
+    Each update embeds the in-plane Mandel strains [ε11, ε22, √2ε12] into 3-D, advances the 3-D
+    law (with its own yield set, e.g. 3-D von Mises), and returns the in-plane stress and the
+    in-plane block of the tangent; σ13 = σ23 = 0 stay zero because they decouple. σ33 is an
+    internal variable per point, kept here and committed with the step
+    (:meth:`commit`); it starts at zero.
+
+    Args:
+        law: a law whose elasticity model is ``"3d"`` or ``"3d_standard"``.
+    """
+
+    _IN_PLANE = np.array([0, 1, 5])  # 3-D Mandel slots of σ11, σ22, √2 σ12
+
+    def __init__(self, law):
+        if law.elasticity.model not in ("3d", "3d_standard"):
+            raise InputError(f"plane strain needs a 3-D law, got model {law.elasticity.model!r}")
+        self.law = law
+        self.elasticity = law.elasticity
+        self.scheme = law.scheme
+        self._s33_old = np.zeros(0)
+        self._s33 = np.zeros(0)
+
+    @property
+    def linear_in_strain(self) -> bool:
+        return self.law.linear_in_strain
+
+    def explicit_step_limit(self) -> float:
+        """The 3-D law's limit (its stiffest mode, the hydrostatic one, exists in plane strain)."""
+        return self.law.explicit_step_limit()
+
+    def update(self, stress_old, strain_old, strain_new, dt, stress_out, tangent_out) -> None:
+        """As the 3-D law's update, for in-plane (N, 3) Mandel arrays."""
+        n = stress_old.shape[0]
+        if self._s33_old.shape != (n,):
+            self._s33_old, self._s33 = np.zeros(n), np.zeros(n)
+        ip = self._IN_PLANE
+        s_old, e_old, e_new = np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, 6))
+        s_old[:, ip], s_old[:, 2] = stress_old, self._s33_old
+        e_old[:, ip], e_new[:, ip] = strain_old, strain_new
+        s_new, t_new = np.empty((n, 6)), np.empty((n, 6, 6))
+        self.law.update(s_old, e_old, e_new, dt, s_new, t_new)
+        stress_out[:] = s_new[:, ip]
+        tangent_out[:] = t_new[:, ip][:, :, ip]
+        self._s33[:] = s_new[:, 2]
+
+    def commit(self) -> None:
+        """Accept the step: σ33 of the new state becomes the old one."""
+        self._s33_old[:] = self._s33
+
+    def out_of_plane_stress(self) -> np.ndarray:
+        """σ33 at the points of the last update (same order as the stress arrays)."""
+        return self._s33

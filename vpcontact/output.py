@@ -31,11 +31,13 @@ def mandel_to_full(m: np.ndarray, dim: int) -> np.ndarray:
     return out
 
 
-def von_mises(m: np.ndarray, dim: int) -> np.ndarray:
-    """√(3/2 s:s) of Mandel stresses (plane stress in 2-D: σ33 = 0; 1-D: |σ|)."""
+def von_mises(m: np.ndarray, dim: int, s33: np.ndarray | None = None) -> np.ndarray:
+    """√(3/2 s:s) of Mandel stresses (2-D: σ33 = ``s33``, zero in plane stress; 1-D: |σ|)."""
     t = mandel_to_full(m, dim)
     full = np.zeros((m.shape[0], 3, 3))
     full[:, :dim, :dim] = t
+    if s33 is not None:
+        full[:, 2, 2] = s33
     dev = full - np.trace(full, axis1=1, axis2=2)[:, None, None] * np.eye(3) / 3.0
     return np.sqrt(1.5 * np.einsum("nij,nij->n", dev, dev))
 
@@ -43,8 +45,9 @@ def von_mises(m: np.ndarray, dim: int) -> np.ndarray:
 class CellStress:
     """DG0 fields of the cell-averaged stress tensor and its von Mises norm."""
 
-    def __init__(self, state: QuadratureState):
+    def __init__(self, state: QuadratureState, out_of_plane=None):
         self.state = state
+        self._out_of_plane = out_of_plane  # () -> σ33 per point (plane strain) or None
         mesh = state.stress.function_space.mesh
         dim = state.dim
         self.stress = fem.Function(fem.TensorFunctionSpace(mesh, ("DG", 0), shape=(dim, dim)),
@@ -66,7 +69,10 @@ class CellStress:
         dim = st.dim
         self.stress.x.array.reshape(-1, dim * dim)[self._dg_dofs] = \
             mandel_to_full(mean, dim).reshape(-1, dim * dim)
-        self.von_mises.x.array[self._dg_dofs] = von_mises(mean, dim)
+        s33 = None
+        if self._out_of_plane is not None and len(self._out_of_plane()) == st.num_points:
+            s33 = np.einsum("q,cq->c", self._weights, self._out_of_plane()[self._q_dofs])
+        self.von_mises.x.array[self._dg_dofs] = von_mises(mean, dim, s33)
 
 
 class XdmfSeries:

@@ -212,6 +212,8 @@ class QuasistaticProblem:
             self.state.rollback()
             raise
         self.state.commit()
+        if hasattr(self.law, "commit"):  # laws with internal variables of their own
+            self.law.commit()
         self._contact_active = self._any_contact_active()
         self._u_prev, self._dt_prev = u_old, dt
         self.step_index = n

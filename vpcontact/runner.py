@@ -47,7 +47,7 @@ pairs) besides u, stress and von Mises norm.
     """
     control = StepControl(dt, max_cuts=max_cuts)
     comm = problem.mesh.comm
-    cells = CellStress(problem.state)
+    cells = CellStress(problem.state, getattr(problem.law, "out_of_plane_stress", None))
     series = None
     if out is not None:
         if comm.rank == 0:
