@@ -19,23 +19,20 @@ writes bench/results/scene_dispatch.json (and prints it).
 from __future__ import annotations
 
 import argparse
-import json
 import logging
-import platform
 import re
 import sys
 import tempfile
 import time
 from pathlib import Path
 
-import dolfinx
 import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
-from petsc4py import PETSc
 
+from benchlib import machine, save
 from vpcontact import scene as scenes
 from vpcontact.build import build
 from vpcontact.nonlinear import DEFAULT_OPTIONS
@@ -116,9 +113,7 @@ def main(argv=None) -> int:
     dofs = 2 * (args.cells[0] + 1) * (args.cells[1] + 1)
     result = {
         "benchmark": "scene_dispatch",
-        "machine": {"platform": platform.platform(), "python": sys.version.split()[0],
-                    "dolfinx": dolfinx.__version__,
-                    "petsc": ".".join(map(str, PETSc.Sys.getVersion())), "mpi_ranks": comm.size},
+        "machine": machine(comm),
         "problem": {"scene": "elastic_2d", "cells": args.cells, "dofs": dofs, "steps": args.steps},
         "seconds": {"elastic_scene": free, "dolfinx_linear_problem": plain,
                     "signorini_scene_unreached": far},
@@ -128,11 +123,7 @@ def main(argv=None) -> int:
         "targets": {"elastic_scene_over_linear_problem <= 1.15": bool(free / plain <= 1.15),
                     "unreached_signorini_over_no_contact <= 1.2": bool(far / free <= 1.2)},
     }
-    if comm.rank == 0:
-        out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(result, indent=2) + "\n")
-        print(json.dumps(result, indent=2))
+    save(result, args.out, comm)
     return 0
 
 

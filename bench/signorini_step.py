@@ -18,9 +18,7 @@ writes bench/results/signorini_step.json (and prints it).
 from __future__ import annotations
 
 import argparse
-import json
 import logging
-import platform
 import sys
 import time
 from pathlib import Path
@@ -31,8 +29,8 @@ import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
-from petsc4py import PETSc
 
+from benchlib import machine, save
 from vpcontact import paper_signorini as paper
 from vpcontact.nonlinear import DEFAULT_OPTIONS
 from vpcontact.stepping import StepControl, advance
@@ -59,16 +57,6 @@ def elastic_solve_time(V, options: dict, repeats: int = 3) -> float:
     for _ in range(repeats):
         problem.solve()
     return (time.perf_counter() - start) / repeats
-
-
-def _blas() -> str:
-    """The BLAS library the process loaded (Debian picks it through alternatives)."""
-    try:
-        maps = Path("/proc/self/maps").read_text()
-    except OSError:
-        return "unknown"
-    names = sorted({line.split()[-1] for line in maps.splitlines() if "blas" in line.lower()})
-    return ", ".join(names) or "unknown"
 
 
 def main(argv=None) -> int:
@@ -108,13 +96,10 @@ def main(argv=None) -> int:
     step_time = wall / steps
     result = {
         "benchmark": "signorini_step",
-        "machine": {"platform": platform.platform(), "processor": platform.processor(),
-                    "python": sys.version.split()[0], "dolfinx": dolfinx.__version__,
-                    "petsc": ".".join(map(str, PETSc.Sys.getVersion())), "mpi_ranks": comm.size},
+        "machine": machine(comm),
         "problem": {"case": "paper 4.1.2 (3-D Signorini, implicit Perzyna)",
                     "mesh": [3 * args.n, args.n, args.n], "dofs": dofs, "dt": args.dt,
                     "t_final": args.t_final, "petsc_options": options, "linear_solver": linear},
-        "blas": _blas(),
         "steps": steps, "cuts": len(control.cuts), "newton_iterations": its,
         "newton_iterations_per_step": total_its / steps,
         "seconds_per_step": step_time, "seconds_per_step_split": split,
@@ -125,11 +110,7 @@ def main(argv=None) -> int:
         "targets": {"newton_iterations_per_step <= 4": bool(total_its / steps <= 4),
                     "step_over_elastic_solve <= 3": bool(step_time / elastic <= 3)},
     }
-    if comm.rank == 0:
-        out = Path(args.out)
-        out.parent.mkdir(parents=True, exist_ok=True)
-        out.write_text(json.dumps(result, indent=2) + "\n")
-        print(json.dumps(result, indent=2))
+    save(result, args.out, comm)
     return 0
 
 

@@ -1,7 +1,6 @@
 # SPDX-License-Identifier: MIT
 """Plane strain (ε33 = 0, σ33 free) on 2-D meshes: a 3-D law restricted to the plane."""
 
-import math
 
 import numpy as np
 import pytest

@@ -17,7 +17,7 @@ from typing import Dict, Optional
 
 import numpy as np
 import ufl
-from dolfinx import fem, mesh as dmesh
+from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from vpcontact.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
