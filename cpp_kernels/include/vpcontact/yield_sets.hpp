@@ -159,15 +159,34 @@ struct YieldSet
         throw std::logic_error("YieldSet: unexpected first eigenvector");
   }
 
-  /// Yield function tau . Y tau.
+  /// Yield function tau . Y tau (see class_value).
   /// @param tau Mandel vector of length N.
   double value(const double* tau) const noexcept
   {
-    const detail::Vector<N> z = detail::multiply<N>(Q, detail::load<N>(tau));
-    double f = 0.0;
-    for (int i = 0; i < N; ++i)
-      f += y[i] * z[i] * z[i];
-    return f;
+    return class_value(y[0], N == 1 ? 0.0 : y[N - 1], detail::load<N>(tau));
+  }
+
+  /// y_0 |P_0 x|^2 + y_1 |P_1 x|^2 with the mean split off exactly, so that a
+  /// large mean part (hydrostatic in 3-D) costs only eps |x| in the other part,
+  /// not eps |x|^2 as the quadratic form x . Y x would.
+  /// @param y0 Eigenvalue of Y on the mean direction q_0.
+  /// @param y1 Eigenvalue of Y on its complement (unused for N = 1).
+  /// @param x Mandel vector.
+  static double class_value(double y0, double y1, const detail::Vector<N>& x) noexcept
+  {
+    if constexpr (N == 1)
+      return y0 * x[0] * x[0];
+    else
+    {
+      const double m = mean(x);
+      double rest = 0.0;
+      for (int a = 0; a < N; ++a)
+      {
+        const double d = x[a] - (a < mean_size ? m : 0.0);
+        rest += d * d;
+      }
+      return y0 > 0.0 ? y1 * rest + y0 * (mean_size * m * m) : y1 * rest;
+    }
   }
 
   /// The mean (x_0 + ... + x_{k-1})/k, so that (P_0 x)_a = mean for a < k.
@@ -557,16 +576,10 @@ void project(const YieldSet<N>& set, std::size_t num_points, const double* sigma
 template <int N>
 void yield_function(Model model, std::size_t num_points, const double* tau, double* values)
 {
-  const detail::Matrix<N> Y = yield_matrix<N>(model);
+  const std::array<double, N> y = yield_eigenvalues<N>(model);
+  const double y1 = N == 1 ? 0.0 : y[N - 1];
   for (std::size_t p = 0; p < num_points; ++p)
-  {
-    const detail::Vector<N> x = detail::load<N>(tau + p * N);
-    const detail::Vector<N> Yx = detail::multiply<N>(Y, x);
-    double f = 0.0;
-    for (int i = 0; i < N; ++i)
-      f += x[i] * Yx[i];
-    values[p] = f;
-  }
+    values[p] = YieldSet<N>::class_value(y[0], y1, detail::load<N>(tau + p * N));
 }
 
 } // namespace vpcontact
