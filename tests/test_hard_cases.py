@@ -14,7 +14,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from vpcontact import paper_signorini as paper
-from vpcontact.constitutive import Elastic, Elasticity
+from vpcontact.constitutive import Elastic, Elasticity, PlaneStrain
 from vpcontact.contact import NormalCompliance
 from vpcontact.problem import Loads, QuasistaticProblem, tag_facets
 from vpcontact.signorini import Signorini
@@ -113,3 +113,25 @@ def test_unloading_releases_every_contact_node():
 def _pull_back(t):
     """-1e3 sin(πt) of the time constant: downwards for t < 1, upwards after."""
     return -1e3 * ufl.sin(np.pi * t)
+
+
+def _tip_deflection(nu: float, degree: int, n: int) -> float:
+    """Plane-strain cantilever (4 × 1, 4n × n cells) under a unit end shear: max downward u_2."""
+    mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.zeros(2), np.array([4.0, 1.0])], [4 * n, n])
+    tags = tag_facets(mesh, {1: lambda x: np.isclose(x[0], 0.0), 2: lambda x: np.isclose(x[0], 4.0)})
+    problem = QuasistaticProblem(mesh, tags, PlaneStrain(Elastic(Elasticity("3d", 1e5, nu))), 1,
+                                 Loads(tractions={2: lambda x, t: ufl.as_vector([0.0, -t])}),
+                                 degree=degree)
+    problem.step(1.0)
+    return -_lowest(problem)
+
+
+def test_nearly_incompressible_plane_strain_locks_with_p1_not_with_p2():
+    # ν = 0.499: P1 triangles lock (the deflection is a fraction of the true one and barely
+    # improves with refinement); P2 does not. At ν = 0.3 P1 is merely coarse.
+    for nu, p1_band in ((0.3, (0.7, 0.9)), (0.499, (0.0, 0.3))):
+        reference = _tip_deflection(nu, 2, 16)
+        p1 = _tip_deflection(nu, 1, 4) / reference
+        p2 = _tip_deflection(nu, 2, 4) / reference
+        assert p1_band[0] <= p1 <= p1_band[1], f"nu = {nu}: P1 deflection ratio {p1:.3f}"
+        assert p2 >= 0.95, f"nu = {nu}: P2 deflection ratio {p2:.3f}"
