@@ -58,8 +58,10 @@ def test_perzyna_plane_strain_limits_and_flow():
     for p in (elastic, rigid, soft):
         for _ in range(4):
             p.step(0.25)
+    # separate meshes may be partitioned differently: compare partition-free measures
     scale = _global_max(elastic.u.x.array)
-    assert _global_max(rigid.u.x.array - elastic.u.x.array) <= 1e-9 * scale  # σ_Y = ∞: elastic
+    for measure in (_global_max, lambda a: MPI.COMM_WORLD.allreduce(float(a.min()), op=MPI.MIN)):
+        assert abs(measure(rigid.u.x.array) - measure(elastic.u.x.array)) <= 1e-9 * scale
     assert _global_max(soft.u.x.array) > 1.5 * scale, "a low yield stress must let the beam flow"
     s33 = soft.law.out_of_plane_stress()
     assert np.isfinite(s33).all() and _global_max(s33) > 0
