@@ -64,7 +64,7 @@ def test_force_balance_3d_every_step():
 def test_force_balance_2d_with_contact_on_the_curved_obstacle():
     # Past the paper's T the square reaches the ellipse (from t ≈ 1.3 s); run to 1.45 s.
     problem = paper.signorini_2d(6)
-    touched = False
+    touched, first = False, 0
     for step in advance(problem, 1.45, StepControl(0.05)):
         applied = np.array([0.0, -10.0 * step.time])  # f_0 = (0, -10 t) over the unit square
         err, contact = _balance_errors(problem, applied, lambda x: np.isclose(x[:, 1], 1.0),
@@ -73,8 +73,11 @@ def test_force_balance_2d_with_contact_on_the_curved_obstacle():
         rep = problem.contact_monitor.report()
         assert rep.max_penetration <= 1e-10
         assert rep.max_pressure <= 1e-8 * max(abs(rep.min_pressure), 1.0)
+        if rep.active > 0 and not touched:
+            first = rep.active
         touched |= rep.active > 0
     assert touched, "the square must reach the obstacle by t = 1.45 s"
+    assert first == 1, f"grazing contact starts at one node (the corner x1 = 1), not {first}"
     assert rep.active >= 2, "contact spreads from the corner x1 = 1"
 
 
