@@ -135,3 +135,19 @@ def test_nearly_incompressible_plane_strain_locks_with_p1_not_with_p2():
         p2 = _tip_deflection(nu, 2, 4) / reference
         assert p1_band[0] <= p1 <= p1_band[1], f"nu = {nu}: P1 deflection ratio {p1:.3f}"
         assert p2 >= 0.95, f"nu = {nu}: P2 deflection ratio {p2:.3f}"
+
+
+def test_huge_loads_keep_the_signorini_solution_sharp():
+    # Loads from 1e3 to 1e12 (displacements from 2e-3 to 1e6 in this small-strain model): same
+    # Newton effort, no penetration, and once the gap is negligible the contact force scales
+    # exactly with the load (the problem becomes homogeneous of degree 1).
+    forces = {}
+    for scale in (1e3, 1e6, 1e9, 1e12):
+        problem = _block(Signorini(3, gap=1e-3), load=lambda t, s=scale: -s * t)
+        its = problem.step(1.0).newton_iterations
+        rep = problem.contact_monitor.report()
+        assert its <= 4, f"load scale {scale:g}: {its} Newton iterations"
+        assert rep.max_penetration <= 1e-12 * abs(_lowest(problem))
+        assert rep.max_pressure <= 0.0 and np.isfinite(rep.min_pressure)
+        forces[scale] = rep.normal_force / scale
+    assert forces[1e12] == pytest.approx(forces[1e9], rel=1e-5), forces
