@@ -21,6 +21,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.errors import ConvergenceError
+from vpcontact.vi_linear import LaggedDirectSolve
 
 _counter = itertools.count()
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
@@ -40,6 +41,11 @@ DEFAULT_OPTIONS = {
     "snes_max_it": 50,
     "ksp_type": "preonly",
     "pc_type": "lu",
+    # SNES VI with the direct solver: GMRES preconditioned by a factorization of the full-size
+    # Jacobian that is kept while it stays good (see vpcontact.vi_linear); 0 refactorizes the
+    # reduced matrix at every Newton iteration (PETSc's own behaviour).
+    "vpcontact_vi_lagged_lu": 1,
+    "vpcontact_vi_lag_below": 1e-2,
 }
 if PETSc.Sys.hasExternalPackage("mumps"):
     DEFAULT_OPTIONS["pc_factor_mat_solver_type"] = "mumps"
@@ -124,6 +130,10 @@ class StepSolver:
             opts[key] = value
         self._stall_rtol = float(opts.getReal(self.prefix + "vpcontact_stall_rtol"))
         self._force_rtol = float(opts.getReal(self.prefix + "vpcontact_force_rtol"))
+        self._lag_below = float(opts.getReal(self.prefix + "vpcontact_vi_lag_below"))
+        self._lagged_lu = (opts.getBool(self.prefix + "vpcontact_vi_lagged_lu")
+                           and self._options["ksp_type"] == "preonly"
+                           and self._options["pc_type"] == "lu")
         opts.prefixPop()
         if not 0.0 <= self._force_rtol < 1.0:
             raise ValueError(f"vpcontact_force_rtol must be in [0, 1), got {self._force_rtol}")
@@ -131,6 +141,7 @@ class StepSolver:
             raise ValueError(f"vpcontact_stall_rtol must be in (0, 1), got {self._stall_rtol}")
         self._setup(self.snes)
         _forget(self.prefix, self._options)
+        self.lagged_lu: Optional[LaggedDirectSolve] = None
         self._free_snes: Optional[PETSc.SNES] = None  # unconstrained Newton of a VI problem
         self._bounds = None
         self._fnorm0 = 0.0
@@ -167,6 +178,8 @@ class StepSolver:
             vec.array[finite] /= self.scale
         self._bounds = (lower, upper)
         self.snes.setVariableBounds(lower, upper)
+        if self._lagged_lu and self.snes.getType() == "vinewtonrsls":
+            self._use_lagged_lu()
         # Same options under "<prefix>free_", except the type (and the VI's line search).
         free_prefix = self.prefix + "free_"
         opts = PETSc.Options()
@@ -179,6 +192,23 @@ class StepSolver:
         self._free_snes.setOptionsPrefix(free_prefix)
         self._setup(self._free_snes)
         _forget(free_prefix, {**self._options, "snes_type": 0, "snes_linesearch_type": 0})
+
+    def _use_lagged_lu(self) -> None:
+        """Reduced VI systems solved with lagged full-size LU factors (vpcontact.vi_linear)."""
+        self.lagged_lu = LaggedDirectSolve(self.snes, self._A, self.prefix + "lagged_")
+        ksp = self.snes.getKSP()
+        ksp.setType("python")
+        ksp.setPythonContext(self.lagged_lu)
+        ksp.getPC().setType("none")  # the context solves; PETSc must not factorize J_II
+        ksp.setTolerances(rtol=1e-9, atol=0.0)
+        self.lagged_lu.lag_allowed = self._lag_allowed
+
+    def _lag_allowed(self) -> bool:
+        """Try lagged factors when the tangent is constant, or once Newton is in its final phase
+        (||F|| <= vpcontact_vi_lag_below ||F_0||): earlier, quadrature points still switch
+        between elastic and plastic and GMRES with old factors would not converge (measured)."""
+        return (self.constant_jacobian
+                or self.snes.getFunctionNorm() <= self._lag_below * self._fnorm0)
 
     def _feasible(self, x: PETSc.Vec) -> bool:
         """x within the bounds (to 1e-6 in units of x, i.e. round-off in physical units)."""
@@ -256,6 +286,8 @@ class StepSolver:
             A.scale(self.scale)  # d(residual)/dx = d(residual)/du * scale
         self._jacobian_dt = self.dt
         self.jacobian_assemblies += 1
+        if self.constant_jacobian and self.lagged_lu is not None:
+            self.lagged_lu.expire()  # a new step size: the factors of M are out of date
         self.timings["jacobian"] += _time.perf_counter() - start
 
     def solve(self, time: float, step: int, try_unconstrained: bool = False) -> int:
@@ -284,6 +316,8 @@ class StepSolver:
         if self.scale != 1.0:
             self._x.scale(1.0 / self.scale)
         self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
+        if self.lagged_lu is not None and not self.constant_jacobian:
+            self.lagged_lu.expire()  # a new tangent (committed state): refactorize at first use
         its = 0
         snes = self.snes
         if try_unconstrained and self._free_snes is not None:

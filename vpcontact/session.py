@@ -145,6 +145,7 @@ class Session:
             "jacobian_assemblies": solver.jacobian_assemblies,
             "kernel_calls": solver.kernel_calls,
             "vi_solves": solver.vi_solves,
+            "vi_linear_solves": None if solver.lagged_lu is None else solver.lagged_lu.counters(),
         }
         if self.comm.rank == 0:
             self.out.mkdir(parents=True, exist_ok=True)
