@@ -15,11 +15,11 @@ which after a symmetric permutation is diag(J_II, 1): its factors solve the redu
 exactly. Each reduced solve first tries GMRES preconditioned by the factors of the last M (the
 "lagged" factors, from an earlier iterate or active set); when that does not converge within a
 few iterations (the tangent moved too much, e.g. many quadrature points switched between elastic
-and plastic), M is rebuilt from the current Jacobian and active set, refactorized (numeric only:
-the pattern never changes) and the system is solved directly. Near convergence, where the
-tangent barely changes, a Newton iteration then costs a few substitutions instead of a
-factorization; the worst case costs a bounded number of wasted substitutions more than PETSc's
-own approach.
+and plastic), M is rebuilt from the current Jacobian and active set, refactorized (numeric
+only: the pattern never changes; Cholesky when M is symmetric, as the tangents here are) and
+the system is solved directly. Near convergence, where the tangent barely changes, a Newton
+iteration then costs a few substitutions instead of a factorization; the worst case costs a
+bounded number of wasted substitutions more than PETSc's own approach.
 """
 
 from __future__ import annotations
@@ -83,6 +83,7 @@ class LaggedDirectSolve:
         self._inactive = np.zeros(0, dtype=np.int32)  # local positions of the current I
         self._krylov_size = None
         self.lag_allowed: Callable[[], bool] = lambda: True
+        self.factorization = "lu"
         self._factored = False
         self._skip_lagged = False  # the last lagged attempt failed: refactorize straight away
         self.factorizations = 0  # numeric factorizations of M
@@ -92,7 +93,7 @@ class LaggedDirectSolve:
 
     def counters(self) -> dict:
         """Factorizations, substitutions, and lagged solves (successful and abandoned)."""
-        return {"factorizations": self.factorizations, "substitutions": self.substitutions,
+        return {"factorization": self.factorization, "factorizations": self.factorizations, "substitutions": self.substitutions,
                 "lagged_solves": self.lagged_solves, "lagged_failures": self.lagged_failures}
 
     def expire(self) -> None:
@@ -144,10 +145,25 @@ class LaggedDirectSolve:
         owned = self.jacobian.getLocalSize()[0]
         active = np.setdiff1d(np.arange(owned, dtype=np.int32), self._inactive) + rstart
         self.matrix.zeroRowsColumns(active.astype(PETSc.IntType), diag=1.0)
+        self._choose_factorization()
         self.direct.setOperators(self.matrix)
         self.direct.setUp()  # numeric factorization; the symbolic one is reused after the first
         self.factorizations += 1
         self._factored = True
+
+    def _choose_factorization(self) -> None:
+        """Cholesky (LDLᵀ) when M is symmetric to round-off, else LU: the consistent tangents of
+        the energy-norm projection and of the linear laws are symmetric, and LDLᵀ halves the
+        factorization. Checked at every factorization (a user law need not be symmetric)."""
+        scale = self.matrix.norm(PETSc.NormType.INFINITY)
+        kind = "cholesky" if self.matrix.isSymmetric(1e-12 * scale) else "lu"
+        pc = self.direct.getPC()
+        if pc.getType() != kind:
+            solver = pc.getFactorSolverType()
+            pc.reset()
+            pc.setType(kind)
+            pc.setFactorSolverType(solver)
+            self.factorization = kind
 
     def destroy(self, ksp: Optional[PETSc.KSP] = None) -> None:
         for obj in (self.direct, self.krylov, self.matrix, self._full_rhs, self._full_sol):
