@@ -49,7 +49,7 @@ def run(out: str | Path = "output/signorini_3d", n: int | None = None, dt: float
     """Solve §4.1.2 on a (3n)×n×n mesh with steps dt and write the outputs; return the run record."""
     ci = bool(os.environ.get("CI"))
     n = n or (3 if ci else 8)
-    dt = dt or (0.25 if ci else 0.05)
+    dt = dt or (0.25 if ci else 0.02)
     model = "3d" if yield_set == "printed" else "3d_standard"
     problem = paper.signorini_3d(3 * n, n, n, scheme=scheme, model=model)
     record, history, cells = runner.run(problem, paper.T_FINAL, dt, out=Path(out), name="signorini_3d",
@@ -67,7 +67,7 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description="3-D Signorini test of the paper (§4.1.2)")
     parser.add_argument("--out", default="output/signorini_3d", help="output folder")
     parser.add_argument("--n", type=int, help="cells across the beam (mesh 3n×n×n; default 8, 3 under CI)")
-    parser.add_argument("--dt", type=float, help="time step (default 0.05; 0.25 under CI)")
+    parser.add_argument("--dt", type=float, help="time step (default 0.02; 0.25 under CI)")
     parser.add_argument("--scheme", choices=["explicit", "implicit"], default="implicit")
     parser.add_argument("--yield", dest="yield_set", choices=["printed", "standard"], default="printed")
     parser.add_argument("--no-xdmf", action="store_true", help="skip the XDMF time series")
