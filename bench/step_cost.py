@@ -1,0 +1,155 @@
+# SPDX-License-Identifier: MIT
+"""Benchmark: cost of a viscoplastic Signorini step against the number of unknowns, memory per
+unknown, and the speed-up of 2 MPI ranks.
+
+Targets (issue "[5 of 5]"): the step cost's fitted exponent in the dof count (3-D ≤ 1.15 with an
+iterative solver); peak memory per dof recorded; ``mpirun -n 2`` speed-up on the 3-D test ≥ 1.6.
+
+Each mesh size runs in a fresh process (so its peak resident memory is its own): the paper's
+2-D test (§4.1.1, n×n) in its viscoplastic flow regime, t ∈ [0.4, 0.5] s, and the 3-D test
+(§4.1.2, 3n×n×n) in contact, t ∈ [0.3, 0.4] s, both with k = 0.01 s after an untimed run-in from
+t = 0 with k = 0.02 s. Per step: wall time and its split (kernel, residual assembly, Jacobian
+assembly, linear solves + VI work), Newton iterations, factorizations.
+
+    .venv/bin/python bench/step_cost.py [--sizes2d 16 32 64 128] [--sizes3d 4 6 8 12 16] [--ranks 2]
+
+writes bench/results/step_cost.json (and prints it). ``--single DIM N`` runs one size in this
+process (what the driver launches, serially or under mpirun) and prints its JSON record.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+from mpi4py import MPI
+
+from benchlib import machine, save
+
+WINDOWS = {2: (0.4, 0.5), 3: (0.3, 0.4)}  # timed interval per dimension [s]
+RUN_IN_STEP, STEP = 0.02, 0.01
+
+
+def single(dim: int, n: int, options: dict) -> dict:
+    """Run one size in this process; the record of its timed window."""
+    from vpcontact import paper_signorini as paper
+    from vpcontact.stepping import StepControl, advance
+
+    comm = MPI.COMM_WORLD
+    problem = (paper.signorini_2d(n, petsc_options=options) if dim == 2
+               else paper.signorini_3d(3 * n, n, n, petsc_options=options))
+    t0, t1 = WINDOWS[dim]
+    list(advance(problem, t0, StepControl(RUN_IN_STEP)))
+    solver = problem.solver
+    solver.timings.update({k: 0.0 for k in solver.timings})
+    its0 = solver.total_iterations
+    lagged = solver.lagged_lu
+    fact0 = lagged.factorizations if lagged is not None else 0
+    comm.barrier()
+    start = time.perf_counter()
+    steps = len(list(advance(problem, t1, StepControl(STEP))))
+    comm.barrier()
+    wall = time.perf_counter() - start
+    t = {k: comm.allreduce(v, op=MPI.MAX) / steps for k, v in solver.timings.items()}
+    rss = comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, op=MPI.SUM)
+    V = problem.V
+    dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+    return {"dim": dim, "n": n, "dofs": dofs, "ranks": comm.size, "steps": steps,
+            "seconds_per_step": wall / steps,
+            "seconds_per_step_split": {
+                "kernel": t["kernel"], "residual_assembly": t["residual"],
+                "jacobian_assembly": t["jacobian"],
+                "linear_solve_and_vi": t["snes"] - t["kernel"] - t["residual"] - t["jacobian"]},
+            "newton_iterations_per_step": (solver.total_iterations - its0) / steps,
+            "factorizations_per_step": (None if lagged is None
+                                        else (lagged.factorizations - fact0) / steps),
+            "peak_memory_bytes": rss, "peak_memory_bytes_per_dof": rss / dofs}
+
+
+def launch(dim: int, n: int, ranks: int, options: list) -> dict:
+    """Run ``--single dim n`` in a fresh process (under mpirun when ranks > 1)."""
+    cmd = [sys.executable, __file__, "--single", str(dim), str(n)]
+    for o in options:
+        cmd += ["-o", o]
+    if ranks > 1:
+        mpirun = shutil.which("mpirun")
+        if mpirun is None:
+            raise SystemExit("mpirun (Open MPI) is needed for --ranks > 1")
+        root = ["--allow-run-as-root"] if os.geteuid() == 0 else []
+        cmd = [mpirun, *root, "-n", str(ranks), *cmd]
+    # this process is an MPI singleton: its Open MPI/PMIx variables must not reach the child
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
+    env.update({k: os.environ[k] for k in ("OMPI_ALLOW_RUN_AS_ROOT",
+                                           "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM") if k in os.environ})
+    env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
+    done = subprocess.run(cmd, capture_output=True, text=True, check=False, env=env)
+    if done.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd)} failed:\n{done.stdout[-1000:]}{done.stderr[-2000:]}")
+    record = [line for line in done.stdout.splitlines() if line.startswith("RECORD ")][-1]
+    return json.loads(record[len("RECORD "):])
+
+
+def exponent(records: list) -> float:
+    """Fitted p in seconds per step ~ dofs^p."""
+    dofs = np.array([r["dofs"] for r in records], dtype=float)
+    cost = np.array([r["seconds_per_step"] for r in records])
+    return float(np.polyfit(np.log(dofs), np.log(cost), 1)[0])
+
+
+def marginal_memory(records: list):
+    """Extra peak memory per extra dof between the two largest sizes (the fixed cost of the
+    interpreter and libraries, ~100 MB, dominates the per-dof figure of small meshes)."""
+    if len(records) < 2:
+        return None
+    a, b = sorted(records, key=lambda r: r["dofs"])[-2:]
+    return (b["peak_memory_bytes"] - a["peak_memory_bytes"]) / (b["dofs"] - a["dofs"])
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes2d", type=int, nargs="*", default=[16, 32, 64, 128])
+    parser.add_argument("--sizes3d", type=int, nargs="*", default=[4, 6, 8, 12, 16])
+    parser.add_argument("--ranks", type=int, default=2, help="ranks of the speed-up run (3-D, n=8)")
+    parser.add_argument("-o", dest="options", action="append", default=[], metavar="KEY=VALUE",
+                        help="PETSc option for the step's SNES")
+    parser.add_argument("--single", nargs=2, type=int, metavar=("DIM", "N"), help=argparse.SUPPRESS)
+    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "step_cost.json"))
+    args = parser.parse_args(argv)
+    if any("=" not in o for o in args.options):
+        parser.error("-o takes KEY=VALUE")
+    if args.single:
+        record = single(*args.single, dict(o.split("=", 1) for o in args.options))
+        if MPI.COMM_WORLD.rank == 0:
+            print("RECORD " + json.dumps(record), flush=True)
+        return 0
+
+    result = {"benchmark": "step_cost", "machine": machine(MPI.COMM_WORLD),
+              "step": STEP, "windows": {str(d): w for d, w in WINDOWS.items()},
+              "petsc_options": args.options}
+    for dim, sizes in ((2, args.sizes2d), (3, args.sizes3d)):
+        records = [launch(dim, n, 1, args.options) for n in sizes]
+        result[f"{dim}d"] = {"records": records,
+                             "exponent": exponent(records) if len(records) > 1 else None,
+                             "marginal_memory_bytes_per_dof": marginal_memory(records)}
+    if args.ranks > 1:
+        serial = launch(3, 8, 1, args.options)
+        parallel = launch(3, 8, args.ranks, args.options)
+        speedup = serial["seconds_per_step"] / parallel["seconds_per_step"]
+        result["mpi"] = {"serial": serial, "parallel": parallel, "speedup": speedup,
+                         "target speedup >= 1.6": bool(speedup >= 1.6)}
+    save(result, args.out, MPI.COMM_WORLD)
+    return 0
+
+
+if __name__ == "__main__":
+    logging.getLogger().setLevel(logging.WARNING)
+    sys.exit(main())
