@@ -173,7 +173,7 @@ def test_signorini_3d_data():
     assert end.kind == "traction" and end.plane.axis == 0 and end.plane.value == 3.0
     assert end.traction[2].numpy(np.zeros((3, 1)), 1.0)[0] == -10.0
     assert scene.law.yield_set == "paper"
-    assert scene.contact.gap.value() == 0.0 and scene.time.k == 0.05
+    assert scene.contact.gap.value() == 0.0 and scene.time.k == 0.02
     assert scene.material.plane is None
 
 

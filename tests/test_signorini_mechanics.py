@@ -72,7 +72,9 @@ def test_force_balance_2d_with_contact_on_the_curved_obstacle():
         assert err <= 1e-8, f"t = {step.time}: force balance off by {err:.2e}"
         rep = problem.contact_monitor.report()
         assert rep.max_penetration <= 1e-10
-        assert rep.max_pressure <= 1e-8 * max(abs(rep.min_pressure), 1.0)
+        # no tensile contact pressure, to the force-balance tolerance relative to the load
+        # (at inactive nodes the "pressure" is the residual's round-off, which scales with it)
+        assert rep.max_pressure <= 1e-8 * max(abs(rep.min_pressure), np.linalg.norm(applied))
         if rep.active > 0 and not touched:
             first = rep.active
         touched |= rep.active > 0

@@ -3,14 +3,15 @@
 PETSc's own reduced direct solves' answer with fewer factorizations."""
 
 import numpy as np
+import pytest
 from mpi4py import MPI
 
 from vpcontact import paper_signorini as paper
 from vpcontact.problem import QuasistaticProblem
 
 
-def _run(lagged: bool, steps: int = 6, dt: float = 0.02) -> tuple[QuasistaticProblem, list]:
-    problem = paper.signorini_3d(9, 3, 3, petsc_options={"vpcontact_vi_lagged_lu": int(lagged)})
+def _run(linear: str, steps: int = 6, dt: float = 0.02) -> tuple[QuasistaticProblem, list]:
+    problem = paper.signorini_3d(9, 3, 3, petsc_options={"vpcontact_vi_linear": linear})
     reports = [problem.step(dt) for _ in range(steps)]
     return problem, reports
 
@@ -25,8 +26,8 @@ def _global(problem, values):
 
 
 def test_lagged_factors_reproduce_petsc_reduced_solves_with_fewer_factorizations():
-    reference, ref_reports = _run(lagged=False)
-    problem, reports = _run(lagged=True)
+    reference, ref_reports = _run("petsc")
+    problem, reports = _run("lagged_lu")
     assert reference.solver.lagged_lu is None
     counters = problem.solver.lagged_lu.counters()
 
@@ -42,3 +43,23 @@ def test_lagged_factors_reproduce_petsc_reduced_solves_with_fewer_factorizations
     assert counters["lagged_solves"] >= 1, counters
     assert counters["factorizations"] < its, (counters, its)
     assert counters["lagged_failures"] <= counters["lagged_solves"], counters
+
+
+def test_lagged_multigrid_gives_the_same_solution():
+    """GAMG on the full-size matrix inside the VI (PETSc's GAMG refuses the reduced matrices)."""
+    reference, ref_reports = _run("petsc")
+    problem, reports = _run("lagged_gamg")
+    got, want = _global(problem, problem.u.x.array), _global(reference, reference.u.x.array)
+    scale = max(abs(w) for w in want)
+    assert np.allclose(got, want, rtol=0, atol=1e-7 * scale), (got, want)
+    its = sum(r.newton_iterations for r in reports)
+    ref_its = sum(r.newton_iterations for r in ref_reports)
+    assert abs(its - ref_its) <= len(reports), (its, ref_its)
+    counters = problem.solver.lagged_lu.counters()
+    assert 1 <= counters["multigrid_setups"] <= its, counters
+    assert counters["krylov_iterations"] >= its, counters
+
+
+def test_unknown_vi_linear_solver_is_refused():
+    with pytest.raises(ValueError, match="vpcontact_vi_linear must be"):
+        _run("cholesky", steps=0)

@@ -21,7 +21,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.errors import ConvergenceError
-from vpcontact.vi_linear import LaggedDirectSolve
+from vpcontact.vi_linear import LaggedDirectSolve, LaggedMultigrid, rigid_body_modes
 
 _counter = itertools.count()
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
@@ -41,10 +41,12 @@ DEFAULT_OPTIONS = {
     "snes_max_it": 50,
     "ksp_type": "preonly",
     "pc_type": "lu",
-    # SNES VI with the direct solver: GMRES preconditioned by a factorization of the full-size
-    # Jacobian that is kept while it stays good (see vpcontact.vi_linear); 0 refactorizes the
-    # reduced matrix at every Newton iteration (PETSc's own behaviour).
-    "vpcontact_vi_lagged_lu": 1,
+    # Linear solves of SNES VI (vpcontact.vi_linear): "lagged_lu" (GMRES preconditioned by kept
+    # factors of a full-size matrix, refactorized when they stop fitting), "lagged_gamg" (the
+    # same with an algebraic multigrid cycle: for large 3-D meshes), or "petsc" (the ksp_/pc_
+    # options on the reduced matrix, refactorized every iteration: PETSc's own behaviour).
+    # Options of the inner solver go under "lagged_" (e.g. lagged_pc_gamg_threshold).
+    "vpcontact_vi_linear": "lagged_lu",
     "vpcontact_vi_lag_below": 1e-2,
 }
 if PETSc.Sys.hasExternalPackage("mumps"):
@@ -131,17 +133,18 @@ class StepSolver:
         self._stall_rtol = float(opts.getReal(self.prefix + "vpcontact_stall_rtol"))
         self._force_rtol = float(opts.getReal(self.prefix + "vpcontact_force_rtol"))
         self._lag_below = float(opts.getReal(self.prefix + "vpcontact_vi_lag_below"))
-        self._lagged_lu = (opts.getBool(self.prefix + "vpcontact_vi_lagged_lu")
-                           and self._options["ksp_type"] == "preonly"
-                           and self._options["pc_type"] == "lu")
+        self._vi_linear = opts.getString(self.prefix + "vpcontact_vi_linear")
         opts.prefixPop()
+        if self._vi_linear not in ("lagged_lu", "lagged_gamg", "petsc"):
+            raise ValueError("vpcontact_vi_linear must be lagged_lu, lagged_gamg or petsc, got "
+                             f"{self._vi_linear!r}")
         if not 0.0 <= self._force_rtol < 1.0:
             raise ValueError(f"vpcontact_force_rtol must be in [0, 1), got {self._force_rtol}")
         if not 0.0 < self._stall_rtol < 1.0:
             raise ValueError(f"vpcontact_stall_rtol must be in (0, 1), got {self._stall_rtol}")
         self._setup(self.snes)
         _forget(self.prefix, self._options)
-        self.lagged_lu: Optional[LaggedDirectSolve] = None
+        self.lagged_lu: Optional[LaggedDirectSolve | LaggedMultigrid] = None
         self._free_snes: Optional[PETSc.SNES] = None  # unconstrained Newton of a VI problem
         self._bounds = None
         self._fnorm0 = 0.0
@@ -178,8 +181,8 @@ class StepSolver:
             vec.array[finite] /= self.scale
         self._bounds = (lower, upper)
         self.snes.setVariableBounds(lower, upper)
-        if self._lagged_lu and self.snes.getType() == "vinewtonrsls":
-            self._use_lagged_lu()
+        if self._vi_linear != "petsc" and self.snes.getType() == "vinewtonrsls":
+            self._use_lagged_solver()
         # Same options under "<prefix>free_", except the type (and the VI's line search).
         free_prefix = self.prefix + "free_"
         opts = PETSc.Options()
@@ -193,15 +196,24 @@ class StepSolver:
         self._setup(self._free_snes)
         _forget(free_prefix, {**self._options, "snes_type": 0, "snes_linesearch_type": 0})
 
-    def _use_lagged_lu(self) -> None:
-        """Reduced VI systems solved with lagged full-size LU factors (vpcontact.vi_linear)."""
-        self.lagged_lu = LaggedDirectSolve(self.snes, self._A, self.prefix + "lagged_")
+    def _use_lagged_solver(self) -> None:
+        """Reduced VI systems solved with a kept full-size preconditioner (vpcontact.vi_linear)."""
+        opts = PETSc.Options()
+        inner = {k: v for k, v in self._options.items() if k.startswith("lagged_")}
+        for key, value in inner.items():
+            opts[self.prefix + key] = value
+        if self._vi_linear == "lagged_lu":
+            self.lagged_lu = LaggedDirectSolve(self.snes, self._A, self.prefix + "lagged_")
+            self.lagged_lu.lag_allowed = self._lag_allowed
+        else:
+            self.lagged_lu = LaggedMultigrid(self.snes, self._A, self.prefix + "lagged_",
+                                             rigid_body_modes(self.u.function_space))
+        _forget(self.prefix, inner)
         ksp = self.snes.getKSP()
         ksp.setType("python")
         ksp.setPythonContext(self.lagged_lu)
         ksp.getPC().setType("none")  # the context solves; PETSc must not factorize J_II
         ksp.setTolerances(rtol=1e-9, atol=0.0)
-        self.lagged_lu.lag_allowed = self._lag_allowed
 
     def _lag_allowed(self) -> bool:
         """When to try lagged factors (measured on the paper's 3-D test, k = 0.01-0.02): with a

@@ -16,10 +16,16 @@ exactly. Each reduced solve first tries GMRES preconditioned by the factors of t
 "lagged" factors, from an earlier iterate or active set); when that does not converge within
 20 iterations (the tangent moved too much, e.g. many quadrature points switched between elastic
 and plastic), M is rebuilt from the current Jacobian and active set, refactorized (numeric
-only: the pattern never changes; Cholesky when M is symmetric, as the tangents here are) and
+only: the pattern never changes; Cholesky when M is symmetric, as the 3-D tangents are) and
 the system is solved directly. Near convergence, where the tangent barely changes, a Newton
 iteration then costs a few substitutions instead of a factorization; the worst case costs a
 bounded number of wasted substitutions more than PETSc's own approach.
+
+:class:`LaggedMultigrid` is the same construction with one algebraic multigrid cycle (GAMG, with
+the rigid-body modes as near null space) on M instead of its factors: GAMG cannot work on SNES
+VI's reduced matrices (they change size), it can on M. It is an option for meshes too large to
+factorize; on the plastic tangent of the paper's data (stiffness contrast k E/μ* between points)
+GMRES needs hundreds of iterations per solve, so it is not the default.
 """
 
 from __future__ import annotations
@@ -42,7 +48,72 @@ class _LaggedFactors:
         self.owner.substitute(x, y)
 
 
-class LaggedDirectSolve:
+class _ReducedSolve:
+    """Shared part of the reduced-system solvers: the inactive set, the full-size matrix M, the
+    embedding of reduced vectors into the full space, and GMRES on J_II preconditioned by an
+    inner solver applied to M (``inner``: direct factors or one multigrid cycle)."""
+
+    def __init__(self, snes: PETSc.SNES, jacobian: PETSc.Mat, inner: PETSc.KSP, restart: int):
+        self.snes = snes
+        self.jacobian = jacobian
+        self.inner = inner
+        self.matrix: Optional[PETSc.Mat] = None  # M, with J's pattern (copied at first use)
+        self.krylov = PETSc.KSP().create(jacobian.getComm())  # GMRES on J_II
+        self.krylov.setType("gmres")
+        self.krylov.setGMRESRestart(restart)
+        self.krylov.setPCSide(PETSc.PC.Side.RIGHT)  # converges on the true residual
+        kpc = self.krylov.getPC()
+        kpc.setType("python")
+        kpc.setPythonContext(_LaggedFactors(self))
+        self._krylov_size = None
+        self._full_rhs = jacobian.createVecRight()
+        self._full_sol = jacobian.createVecRight()
+        self._inactive = np.zeros(0, dtype=np.int32)  # local positions of the current I
+        self.substitutions = 0  # applications of the inner solver
+
+    def _read_inactive_set(self) -> int:
+        rstart = self.jacobian.getOwnershipRange()[0]
+        self._inactive = (self.snes.getVIInactiveSet().getIndices() - rstart).astype(np.int32)
+        return rstart
+
+    def _gmres(self, reduced: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float, atol: float,
+               max_it: int) -> bool:
+        """GMRES on J_II x = b preconditioned by the inner solver; True when it converged."""
+        if self._krylov_size != reduced.getSizes():
+            self.krylov.reset()  # PETSc refuses operators of another size after use
+            self._krylov_size = reduced.getSizes()
+        self.krylov.setOperators(reduced)
+        self.krylov.setTolerances(rtol=rtol, atol=atol, max_it=max_it)
+        self.krylov.solve(b, x)
+        return self.krylov.getConvergedReason() > 0
+
+    def substitute(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
+        """y = (M⁻¹ E x)_I with E the embedding of I into the full space (zeros on A)."""
+        rhs = self._full_rhs
+        rhs.set(0.0)
+        rhs.array[self._inactive] = x.array_r
+        self.inner.solve(rhs, self._full_sol)
+        y.array[:] = self._full_sol.array_r[self._inactive]
+        self.substitutions += 1
+
+    def _rebuild_matrix(self, rstart: int) -> None:
+        """M = the current J with the rows and columns of the active set set to the identity."""
+        if self.matrix is None:
+            self.matrix = self.jacobian.duplicate(copy=True)
+            self.matrix.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
+        else:
+            self.jacobian.copy(self.matrix, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        owned = self.jacobian.getLocalSize()[0]
+        active = np.setdiff1d(np.arange(owned, dtype=np.int32), self._inactive) + rstart
+        self.matrix.zeroRowsColumns(active.astype(PETSc.IntType), diag=1.0)
+
+    def destroy(self, ksp: Optional[PETSc.KSP] = None) -> None:
+        for obj in (self.inner, self.krylov, self.matrix, self._full_rhs, self._full_sol):
+            if obj is not None:
+                obj.destroy()
+
+
+class LaggedDirectSolve(_ReducedSolve):
     """PETSc python-KSP context for the reduced systems of SNES VI (see the module docstring).
 
     Args:
@@ -60,43 +131,29 @@ class LaggedDirectSolve:
 
     def __init__(self, snes: PETSc.SNES, jacobian: PETSc.Mat, options_prefix: str,
                  lagged_iterations: int = 20):
-        self.snes = snes
-        self.jacobian = jacobian
-        comm = jacobian.getComm()
-        self.matrix: Optional[PETSc.Mat] = None  # M, with J's pattern (copied at first use)
-        self.direct = PETSc.KSP().create(comm)
-        self.direct.setOptionsPrefix(options_prefix)
-        self.direct.setType("preonly")
-        pc = self.direct.getPC()
+        direct = PETSc.KSP().create(jacobian.getComm())
+        direct.setOptionsPrefix(options_prefix)
+        direct.setType("preonly")
+        pc = direct.getPC()
         pc.setType("lu")
         if PETSc.Sys.hasExternalPackage("mumps"):
             pc.setFactorSolverType("mumps")
-        self.direct.setFromOptions()
-        self.krylov = PETSc.KSP().create(comm)  # GMRES on J_II with the lagged factors
-        self.krylov.setType("gmres")
-        self.krylov.setGMRESRestart(lagged_iterations)
-        self.krylov.setPCSide(PETSc.PC.Side.RIGHT)  # converges on the true residual
-        kpc = self.krylov.getPC()
-        kpc.setType("python")
-        kpc.setPythonContext(_LaggedFactors(self))
+        direct.setFromOptions()
+        super().__init__(snes, jacobian, direct, restart=lagged_iterations)
         self.lagged_iterations = int(lagged_iterations)
-        self._full_rhs = jacobian.createVecRight()
-        self._full_sol = jacobian.createVecRight()
-        self._inactive = np.zeros(0, dtype=np.int32)  # local positions of the current I
-        self._krylov_size = None
         self.lag_allowed: Callable[[], bool] = lambda: True
         self.factorization = "lu"
         self._factored = False
         self._skip_lagged = False  # the last lagged attempt failed: refactorize straight away
         self.factorizations = 0  # numeric factorizations of M
-        self.substitutions = 0  # forward/backward solves with its factors
         self.lagged_solves = 0  # reduced systems solved with lagged factors
         self.lagged_failures = 0  # lagged attempts abandoned for a refactorization
 
     def counters(self) -> dict:
         """Factorizations, substitutions, and lagged solves (successful and abandoned)."""
-        return {"factorization": self.factorization, "factorizations": self.factorizations, "substitutions": self.substitutions,
-                "lagged_solves": self.lagged_solves, "lagged_failures": self.lagged_failures}
+        return {"factorization": self.factorization, "factorizations": self.factorizations,
+                "substitutions": self.substitutions, "lagged_solves": self.lagged_solves,
+                "lagged_failures": self.lagged_failures}
 
     def expire(self) -> None:
         """Refactorize at the next solve (the Jacobian changed in a way GMRES should not chase)."""
@@ -106,16 +163,9 @@ class LaggedDirectSolve:
     def solve(self, ksp: PETSc.KSP, b: PETSc.Vec, x: PETSc.Vec) -> None:
         rtol, atol, _, _ = ksp.getTolerances()
         reduced, _ = ksp.getOperators()
-        rstart = self.jacobian.getOwnershipRange()[0]
-        self._inactive = (self.snes.getVIInactiveSet().getIndices() - rstart).astype(np.int32)
+        rstart = self._read_inactive_set()
         if self._factored and not self._skip_lagged and self.lag_allowed():
-            if self._krylov_size != reduced.getSizes():
-                self.krylov.reset()  # PETSc refuses operators of another size after use
-                self._krylov_size = reduced.getSizes()
-            self.krylov.setOperators(reduced)
-            self.krylov.setTolerances(rtol=rtol, atol=atol, max_it=self.lagged_iterations)
-            self.krylov.solve(b, x)
-            if self.krylov.getConvergedReason() > 0:
+            if self._gmres(reduced, b, x, rtol, atol, self.lagged_iterations):
                 self.lagged_solves += 1
                 ksp.setIterationNumber(self.krylov.getIterationNumber())
                 ksp.setConvergedReason(_KSP_REASON.CONVERGED_RTOL)
@@ -124,42 +174,24 @@ class LaggedDirectSolve:
             self._skip_lagged = True
         else:
             self._skip_lagged = False
-        self._factorize(rstart)
+        self._rebuild_matrix(rstart)
+        self._choose_factorization()
+        self.inner.setOperators(self.matrix)
+        self.inner.setUp()  # numeric factorization; the symbolic one is reused after the first
+        self.factorizations += 1
+        self._factored = True
         self.substitute(b, x)
         ksp.setIterationNumber(1)
         ksp.setConvergedReason(_KSP_REASON.CONVERGED_ITS)
 
-    def substitute(self, x: PETSc.Vec, y: PETSc.Vec) -> None:
-        """y = (M⁻¹ E x)_I with E the embedding of I into the full space (zeros on A)."""
-        rhs = self._full_rhs
-        rhs.set(0.0)
-        rhs.array[self._inactive] = x.array_r
-        self.direct.solve(rhs, self._full_sol)
-        y.array[:] = self._full_sol.array_r[self._inactive]
-        self.substitutions += 1
-
-    def _factorize(self, rstart: int) -> None:
-        if self.matrix is None:
-            self.matrix = self.jacobian.duplicate(copy=True)
-            self.matrix.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
-        else:
-            self.jacobian.copy(self.matrix, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-        owned = self.jacobian.getLocalSize()[0]
-        active = np.setdiff1d(np.arange(owned, dtype=np.int32), self._inactive) + rstart
-        self.matrix.zeroRowsColumns(active.astype(PETSc.IntType), diag=1.0)
-        self._choose_factorization()
-        self.direct.setOperators(self.matrix)
-        self.direct.setUp()  # numeric factorization; the symbolic one is reused after the first
-        self.factorizations += 1
-        self._factored = True
-
     def _choose_factorization(self) -> None:
-        """Cholesky (LDLᵀ) when M is symmetric to round-off, else LU: the consistent tangents of
-        the energy-norm projection and of the linear laws are symmetric, and LDLᵀ halves the
-        factorization. Checked at every factorization (a user law need not be symmetric)."""
+        """Cholesky (LDLᵀ) when M is symmetric to round-off, else LU. LDLᵀ halves the
+        factorization; the 3-D von Mises tangent is symmetric, the plane-stress one is not (the
+        implicit update's metric is not proportional to E⁻¹ there), and a user law need not
+        be: checked at every factorization."""
         scale = self.matrix.norm(PETSc.NormType.INFINITY)
         kind = "cholesky" if self.matrix.isSymmetric(1e-12 * scale) else "lu"
-        pc = self.direct.getPC()
+        pc = self.inner.getPC()
         if pc.getType() != kind:
             solver = pc.getFactorSolverType()
             pc.reset()
@@ -167,7 +199,100 @@ class LaggedDirectSolve:
             pc.setFactorSolverType(solver)
             self.factorization = kind
 
-    def destroy(self, ksp: Optional[PETSc.KSP] = None) -> None:
-        for obj in (self.direct, self.krylov, self.matrix, self._full_rhs, self._full_sol):
-            if obj is not None:
-                obj.destroy()
+
+class LaggedMultigrid(_ReducedSolve):
+    """PETSc python-KSP context: GMRES on J_II preconditioned by one algebraic multigrid cycle
+    (GAMG) on the full-size M, embedded and restricted like :class:`LaggedDirectSolve`.
+
+    GAMG refuses reduced matrices whose size changes (SNES VI's own use); M never changes size.
+    The hierarchy is kept while GMRES converges in at most ``rebuild_after`` iterations and
+    rebuilt from the current J and active set otherwise (or when a solve fails, which is then
+    retried once with the fresh hierarchy).
+
+    Args:
+        snes, jacobian: as for :class:`LaggedDirectSolve`.
+        options_prefix: prefix of the inner multigrid (``<prefix>pc_gamg_...`` etc.).
+        near_nullspace: the rigid-body modes, which GAMG needs for elasticity.
+        max_iterations: GMRES iterations allowed per solve.
+        rebuild_after: rebuild the hierarchy after a solve that needed more iterations.
+    """
+
+    def __init__(self, snes: PETSc.SNES, jacobian: PETSc.Mat, options_prefix: str,
+                 near_nullspace: Optional[PETSc.NullSpace] = None, max_iterations: int = 300,
+                 rebuild_after: int = 40):
+        cycle = PETSc.KSP().create(jacobian.getComm())
+        cycle.setOptionsPrefix(options_prefix)
+        cycle.setType("preonly")
+        cycle.getPC().setType("gamg")
+        cycle.setFromOptions()
+        super().__init__(snes, jacobian, cycle, restart=max_iterations)
+        self.near_nullspace = near_nullspace
+        self.max_iterations = int(max_iterations)
+        self.rebuild_after = int(rebuild_after)
+        self._ready = False
+        self.setups = 0  # multigrid hierarchies built
+        self.krylov_iterations = 0
+
+    def counters(self) -> dict:
+        """Hierarchies built, cycles applied, GMRES iterations."""
+        return {"multigrid_setups": self.setups, "cycles": self.substitutions,
+                "krylov_iterations": self.krylov_iterations}
+
+    def expire(self) -> None:
+        """Rebuild the hierarchy at the next solve."""
+        self._ready = False
+
+    def solve(self, ksp: PETSc.KSP, b: PETSc.Vec, x: PETSc.Vec) -> None:
+        rtol, atol, _, _ = ksp.getTolerances()
+        reduced, _ = ksp.getOperators()
+        rstart = self._read_inactive_set()
+        fresh = not self._ready
+        if fresh:
+            self._setup(rstart)
+        converged = self._gmres(reduced, b, x, rtol, atol, self.max_iterations)
+        self.krylov_iterations += self.krylov.getIterationNumber()
+        if not converged and not fresh:
+            self._setup(rstart)
+            x.set(0.0)
+            converged = self._gmres(reduced, b, x, rtol, atol, self.max_iterations)
+            self.krylov_iterations += self.krylov.getIterationNumber()
+        its = self.krylov.getIterationNumber()
+        if its > self.rebuild_after or not converged:
+            self._ready = False
+        ksp.setIterationNumber(its)
+        ksp.setConvergedReason(self.krylov.getConvergedReason())
+
+    def _setup(self, rstart: int) -> None:
+        self._rebuild_matrix(rstart)
+        if self.near_nullspace is not None:
+            self.matrix.setNearNullSpace(self.near_nullspace)
+        self.inner.setOperators(self.matrix)
+        self.inner.setUp()
+        self.setups += 1
+        self._ready = True
+
+
+def rigid_body_modes(V) -> PETSc.NullSpace:
+    """Orthonormal rigid-body modes (translations and rotations) of a vector P_k space, in the
+    layout of its PETSc vectors (owned entries): GAMG's near null space for elasticity."""
+    bs = V.dofmap.index_map_bs
+    owned = V.dofmap.index_map.size_local
+    x = V.tabulate_dof_coordinates()[:owned]
+    fields = [np.eye(bs)[i] * np.ones((owned, 1)) for i in range(bs)]  # translations
+    if bs == 2:
+        fields.append(np.column_stack([-x[:, 1], x[:, 0]]))
+    elif bs == 3:
+        fields += [np.column_stack([-x[:, 1], x[:, 0], 0 * x[:, 0]]),
+                   np.column_stack([0 * x[:, 0], -x[:, 2], x[:, 1]]),
+                   np.column_stack([x[:, 2], 0 * x[:, 0], -x[:, 0]])]
+    comm = V.mesh.comm
+    vectors = []
+    for field in fields:
+        vec = PETSc.Vec().createMPI((owned * bs, None), comm=comm)
+        vec.array[:] = field.ravel()
+        vectors.append(vec)
+    for i, vec in enumerate(vectors):
+        for prev in vectors[:i]:
+            vec.axpy(-vec.dot(prev), prev)
+        vec.normalize()
+    return PETSc.NullSpace().create(vectors=vectors, comm=comm)
