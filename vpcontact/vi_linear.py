@@ -38,10 +38,11 @@ from petsc4py import PETSc
 _KSP_REASON = PETSc.KSP.ConvergedReason
 
 
-class _LaggedFactors:
-    """Python-PC context: y = (M⁻¹ E x)_I (embed x on I with zeros on A, solve with M, restrict)."""
+class _EmbeddedInner:
+    """Python-PC context: y = (M⁻¹ E x)_I (embed x on I with zeros on A, apply the inner solver
+    of M, restrict to I)."""
 
-    def __init__(self, owner: "LaggedDirectSolve"):
+    def __init__(self, owner: "_ReducedSolve"):
         self.owner = owner
 
     def apply(self, pc: PETSc.PC, x: PETSc.Vec, y: PETSc.Vec) -> None:
@@ -64,7 +65,7 @@ class _ReducedSolve:
         self.krylov.setPCSide(PETSc.PC.Side.RIGHT)  # converges on the true residual
         kpc = self.krylov.getPC()
         kpc.setType("python")
-        kpc.setPythonContext(_LaggedFactors(self))
+        kpc.setPythonContext(_EmbeddedInner(self))
         self._krylov_size = None
         self._full_rhs = jacobian.createVecRight()
         self._full_sol = jacobian.createVecRight()
