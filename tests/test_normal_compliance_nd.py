@@ -238,6 +238,7 @@ def test_stiff_foundation_with_alpha_below_one_converges_with_a_line_search():
 # (P1, 4 × 4): 2e-17 (α = 1), 7e-5 (α = 1/2), 3e-3 (α = 0.1, 15 % of the contact force).
 QUADRATURE_RTOL = {1.0: 1e-10, 0.5: 1e-3, 0.1: 1e-2}
 ONSET_GAP = {"elastic": GAP, "perzyna": 1e-3}  # contact from t ≈ 0.43 for both laws
+MAX_NEWTON = 15  # per attempt: a step needing more is rejected and retried with k/2
 
 
 @pytest.mark.parametrize("law_name", ["elastic", "perzyna"])
@@ -250,7 +251,11 @@ def test_contact_onset_mid_run(law_name, alpha):
     Perzyna's law (σ_Y = √10, μ* = 200) yields from t ≈ 0.2 and creeps to a bottom displacement
     of ~1e-2 at t = 1; its own yield onset makes the step controller halve the step 8 times even
     without a foundation (measured). With α < 1 contact onset adds rejected steps (measured: 1 for
-    α = 1/2, 7 for α = 0.1); the accepted steps take at most 10 iterations. The foundation has
+    α = 1/2, 7 for α = 0.1); the accepted steps take at most 10 iterations. Newton is capped at
+    15 iterations, so a slow attempt is rejected and retried with k/2 rather than accepted after
+    dozens of iterations (a CI machine once converged one in 42: where Newton cycles, round-off
+    decides whether it escapes); the test bounds the total work, rejected attempts included. The
+    foundation has
     κ = 0.01 for the elastic law and μ = 1e-2 (1e-2)^(α-1) for Perzyna's (it then carries
     1-6 % of the load at t = 1).
     """
@@ -262,13 +267,13 @@ def test_contact_onset_mid_run(law_name, alpha):
         mu = 1e-2 * 1e-2 ** (alpha - 1.0)
     gap = ONSET_GAP[law_name]
     problem = column(2, NormalCompliance(CONTACT, mu=mu, alpha=alpha, gap=gap), n=4, degree=1,
-                     law=law)
+                     law=law, petsc_options={"snes_max_it": MAX_NEWTON})
     balance = ForceBalance(problem, lambda x: np.isclose(x[:, 1], 1.0))
     control = StepControl(0.1)
     first_contact = None
+    accepted_work = 0
     for step in advance(problem, 1.0, control):
-        assert step.newton_iterations <= 15, (f"{law_name}, alpha = {alpha}, t = {step.time:.4f}: "
-                                              f"{step.newton_iterations} Newton iterations")
+        accepted_work += step.newton_iterations
         foundation = _check_balance(balance, np.array([0.0, -LOAD_RATE * step.time]), step.time,
                                     QUADRATURE_RTOL[alpha])
         if first_contact is None and foundation[1] > 0:
@@ -276,8 +281,12 @@ def test_contact_onset_mid_run(law_name, alpha):
     assert first_contact is not None and 0.3 < first_contact < 0.6, (
         f"{law_name}, alpha = {alpha}: contact must start mid-run, started at {first_contact}")
     assert foundation[1] > 1e-3 * LOAD_RATE, f"the foundation carries only {foundation[1]:.3e} N"
-    band = 0 if law_name == "elastic" else 8 + 8  # Perzyna alone: 8 halvings (see above)
+    band = 0 if law_name == "elastic" else 8 + 12  # Perzyna alone: 8 halvings (see above)
     assert len(control.cuts) <= band, f"{law_name}, alpha = {alpha}: {len(control.cuts)} rejected steps"
+    # measured: 3-13 (elastic), 120-158 (Perzyna) iterations in accepted steps, plus 15 per cut
+    work = accepted_work + MAX_NEWTON * len(control.cuts)
+    assert work <= (20 if law_name == "elastic" else 500), (
+        f"{law_name}, alpha = {alpha}: {work} Newton iterations in all, rejected attempts included")
 
 
 def test_paper_2d_geometry_with_a_traction_patch():
