@@ -69,8 +69,10 @@ class Bar1DResult:
 
 
 def build_problem(n_cells: int, comm=MPI.COMM_WORLD, scheme: str = "explicit",
-                  petsc_options: Optional[dict] = None) -> QuasistaticProblem:
-    """The §4.2.1 problem on a uniform mesh of ``n_cells`` P1 elements (P0 stress)."""
+                  petsc_options: Optional[dict] = None,
+                  time_scheme: str = "euler") -> QuasistaticProblem:
+    """The §4.2.1 problem on a uniform mesh of ``n_cells`` P1 elements (P0 stress);
+    ``time_scheme="bdf2"`` (with ``scheme="implicit"``) integrates the law to second order."""
     mesh = dmesh.create_unit_interval(comm, n_cells)
     tags = tag_facets(mesh, {CLAMP: lambda x: np.isclose(x[0], 0.0),
                              CONTACT: lambda x: np.isclose(x[0], 1.0)})
@@ -78,7 +80,7 @@ def build_problem(n_cells: int, comm=MPI.COMM_WORLD, scheme: str = "explicit",
     loads = Loads(body_force=lambda x, t: ufl.as_vector([BODY_FORCE]))
     problem = QuasistaticProblem(mesh, tags, law, clamped_tag=CLAMP, loads=loads,
                                  contact=NormalCompliance(CONTACT, mu=MU, alpha=1.0, gap=GAP),
-                                 petsc_options=petsc_options)
+                                 petsc_options=petsc_options, time_scheme=time_scheme)
     # σ_0^h: the P0 projection of 10 - 10x is its value at the cell midpoint (the quadrature point).
     problem.set_initial_stress(lambda x: (10.0 - 10.0 * x[0])[:, None])
     return problem

@@ -68,7 +68,8 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
         problem = QuasistaticProblem(mesh, facet_tags, law, clamped_tag=clamped[0], loads=loads,
                                      contact=contact, degree=scene.degree,
                                      petsc_options=dict(scene.solver.petsc_options),
-                                     predictor=scene.solver.predictor)
+                                     predictor=scene.solver.predictor,
+                                     time_scheme=scene.time.scheme)
     except InputError as err:
         raise scene.error(_blame(scene, str(err)), str(err)) from None
     _initial_state(scene, problem)
@@ -276,7 +277,7 @@ def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
 
 def _blame(scene: Scene, message: str) -> str:
     """The scene key an InputError from the problem set-up is most likely about."""
-    for key, path in (("clamped", "boundary"), ("gap", "contact.gap"), ("contact", "contact"),
+    for key, path in (("time scheme", "time.scheme"), ("clamped", "boundary"), ("gap", "contact.gap"), ("contact", "contact"),
                       ("point load", "loads.point"), ("Poisson", "material.nu"),
                       ("Young", "material.E")):
         if key in message:

@@ -42,7 +42,8 @@ def obstacle_2d(x: np.ndarray) -> np.ndarray:
 
 
 def signorini_2d(n: int = 32, scheme: str = "implicit", degree: int = 1, comm=MPI.COMM_WORLD,
-                 petsc_options=None, sigma_y: float = SIGMA_Y) -> QuasistaticProblem:
+                 petsc_options=None, sigma_y: float = SIGMA_Y,
+                 time_scheme: str = "euler") -> QuasistaticProblem:
     """§4.1.1: Ω = (0,1)², clamped on top, f_0 = (0, -10t), plane stress, obstacle below."""
     mesh = dmesh.create_unit_square(comm, n, n)
     tags = tag_facets(mesh, {
@@ -54,7 +55,7 @@ def signorini_2d(n: int = 32, scheme: str = "implicit", degree: int = 1, comm=MP
     loads = Loads(body_force=lambda x, t: ufl.as_vector([0.0, -10.0 * t]))  # f_2 = 0 on Γ2
     return QuasistaticProblem(mesh, tags, law, clamped_tag=CLAMP, loads=loads,
                               contact=Signorini(CONTACT, obstacle=obstacle_2d), degree=degree,
-                              petsc_options=petsc_options)
+                              petsc_options=petsc_options, time_scheme=time_scheme)
 
 
 def signorini_3d(nx: int = 24, ny: int = 8, nz: int = 8, scheme: str = "implicit",

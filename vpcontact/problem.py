@@ -78,17 +78,24 @@ class QuasistaticProblem:
             from u_n. Once a body flows (load beyond the plastic limit, k E/μ* >> 1), Newton
             started from u_n classifies points as elastic or plastic wrongly and diverges
             unless k is tiny; the extrapolated guess is O(k²) close and converges.
+        unstable_steps: "error" refuses an explicit step beyond the law's stability limit,
+            "warn" warns once and takes it.
+        time_scheme: "euler" (the paper's: implicit or explicit Euler, as the law says) or
+            "bdf2" (second-order backward differentiation of the law, for implicit laws; the
+            first step is implicit Euler; see :class:`_Bdf2`).
     """
 
     def __init__(self, mesh, facet_tags, law, clamped_tag: int, loads: Loads = Loads(),
                  contact=None, degree: int = 1, petsc_options: Optional[dict] = None,
                  options_prefix: Optional[str] = None, predictor: str = "linear",
-                 unstable_steps: str = "error"):
+                 unstable_steps: str = "error", time_scheme: str = "euler"):
         if predictor not in ("linear", "none"):
             raise InputError(f"predictor must be 'linear' or 'none', got {predictor!r}")
         if unstable_steps not in ("error", "warn"):
             raise InputError(f"unstable_steps must be 'error' or 'warn', got {unstable_steps!r}")
         self.unstable_steps = unstable_steps
+        self.time_scheme = _check_time_scheme(time_scheme, law)
+        self._bdf2 = _Bdf2(law) if time_scheme == "bdf2" else None
         self.predictor = predictor
         self.mesh = mesh
         self.law = law
@@ -181,6 +188,10 @@ class QuasistaticProblem:
     def _update_stress(self) -> None:
         st = self.state
         eps = st.strain_at_points()
+        if self._bdf2 is not None and self._bdf2.active:
+            sigma_hist, zero, dt = self._bdf2.inputs()
+            self.law.update(sigma_hist, zero, eps, dt, st.view(st.stress), st.tangent_view())
+            return
         self.law.update(st.view(st.stress_old), st.view(st.strain_old), eps, self.dt,
                         st.view(st.stress), st.tangent_view())
 
@@ -196,7 +207,9 @@ class QuasistaticProblem:
             # Ghost entries are extrapolated from ghost entries: consistent without a scatter.
             self.u.x.array[:] += (dt / self._dt_prev) * (u_old - self._u_prev)
         self.dt = dt
-        self.solver.dt = dt
+        self.solver.dt = dt  # the constant-Jacobian reuse is keyed on the law's effective step
+        if self._bdf2 is not None:
+            self.solver.dt = self._bdf2.prepare(self.state, dt)
         self.time.value = t_new
         try:
             # Signorini with a Jacobian that is factorized once: while nothing touches, a plain
@@ -211,6 +224,8 @@ class QuasistaticProblem:
             self.time.value = t_new - dt
             self.state.rollback()
             raise
+        if self._bdf2 is not None:
+            self._bdf2.accept(self.state, dt)  # before the commit: it keeps w at t_{n-1}
         self.state.commit()
         if hasattr(self.law, "commit"):  # laws with internal variables of their own
             self.law.commit()
@@ -251,6 +266,58 @@ class QuasistaticProblem:
         local_ok = bool(np.isfinite(self.u.x.array).all() and np.isfinite(self.state.stress.x.array).all())
         if not self.mesh.comm.allreduce(local_ok, op=MPI.LAND):
             raise NonFiniteStateError(f"time step {n} (t = {t:.6g}) produced NaN/Inf in the state")
+
+
+def _check_time_scheme(time_scheme: str, law) -> str:
+    if time_scheme not in ("euler", "bdf2"):
+        raise InputError(f"time_scheme must be 'euler' or 'bdf2', got {time_scheme!r}")
+    if time_scheme == "bdf2" and (getattr(law, "scheme", None) != "implicit"
+                                  or not hasattr(law, "elasticity")):
+        raise InputError("time scheme 'bdf2' needs an implicit law (scheme 'implicit') with its "
+                         f"elasticity; got {type(law).__name__} with scheme "
+                         f"{getattr(law, 'scheme', None)!r}")
+    return time_scheme
+
+
+class _Bdf2:
+    """BDF2 for σ̇ = E ε̇ + G(σ, ε) through the implicit-Euler kernel.
+
+    With w = σ − E ε, ω = k_n/k_{n−1} and variable-step BDF2 coefficients,
+
+        w_n = a1 w_{n−1} + a2 w_{n−2} + b k_n G(σ_n, ε_n),
+        a1 = (1+ω)²/(1+2ω), a2 = −ω²/(1+2ω), b = (1+ω)/(1+2ω)
+
+    (4/3, −1/3, 2/3 for constant steps). The implicit-Euler kernel computes
+    σ = σ_old + E(ε − ε_old) + dt G(σ, ε); given σ_old = a1 w_{n−1} + a2 w_{n−2}, ε_old = 0 and
+    dt = b k_n it returns exactly the BDF2 σ_n, with its consistent tangent.
+    """
+
+    def __init__(self, law):
+        self.E = law.elasticity.matrix()
+        self.w_prev: Optional[np.ndarray] = None  # w_{n−2}: w before the last accepted step
+        self.dt_prev = 0.0
+        self.active = False
+        self._inputs = None
+
+    def prepare(self, state, dt: float) -> float:
+        """Set up the step of size dt; return the kernel's effective step."""
+        self.active = self.w_prev is not None
+        if not self.active:
+            return dt
+        omega = dt / self.dt_prev
+        a1, a2 = (1 + omega) ** 2 / (1 + 2 * omega), -omega**2 / (1 + 2 * omega)
+        w_now = state.view(state.stress_old) - state.view(state.strain_old) @ self.E
+        history = a1 * w_now + a2 * self.w_prev
+        self._inputs = (history, np.zeros_like(history), (1 + omega) / (1 + 2 * omega) * dt)
+        return self._inputs[2]
+
+    def inputs(self):
+        return self._inputs
+
+    def accept(self, state, dt: float) -> None:
+        """Keep w_{n−1} (the committed state before this step) and k_n for the next step."""
+        self.w_prev = state.view(state.stress_old) - state.view(state.strain_old) @ self.E
+        self.dt_prev = dt
 
 
 class _PointDofs:

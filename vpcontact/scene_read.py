@@ -20,7 +20,7 @@ from vpcontact.scene_schema import (REQUIRED, Report, Table, at_least, between, 
 from vpcontact.scene_specs import (BUILTIN_MESHES, CELL_TYPES, DIAGONALS, BoundaryPart,
                                    BoxSelector, ContactSpec, InitialSpec, LoadSpec, MaterialSpec,
                                    MeshSpec, OutputSpec, PlaneSelector, PointLoad, SolverSpec,
-                                   TimeSpec)
+                                   TIME_SCHEMES, TimeSpec)
 
 __all__ = ["TOP_KEYS", "read_scene"]
 
@@ -299,8 +299,8 @@ def read_initial(top: Table, dim: int | None) -> InitialSpec:
 # -- time, solver, output -------------------------------------------------------------------
 
 def read_time(top: Table) -> TimeSpec:
-    """``[time]``: T > 0, 0 < k ≤ T, max_cuts."""
-    t = top.section("time", ("T", "k", "max_cuts"), required=True)
+    """``[time]``: T > 0, 0 < k ≤ T, max_cuts, scheme."""
+    t = top.section("time", ("T", "k", "max_cuts", "scheme"), required=True)
     final, step = t.number("T", check=greater(0)), t.number("k", check=greater(0))
     if final is not None and step is not None:
         if step > final:
@@ -308,7 +308,8 @@ def read_time(top: Table) -> TimeSpec:
         elif final / step > MAX_STEPS:
             t.add("k", f"too many time steps (T/k = {final / step:.3g}, at most {MAX_STEPS})")
     max_cuts = t.integer("max_cuts", 12, check=between(0, MAX_CUTS, "[]"))
-    return TimeSpec(final, step, max_cuts)
+    scheme = t.choice("scheme", TIME_SCHEMES, "euler")
+    return TimeSpec(final, step, max_cuts, scheme)
 
 
 def read_solver(top: Table) -> SolverSpec:

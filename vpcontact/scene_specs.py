@@ -17,6 +17,8 @@ __all__ = ["BoundaryPart", "BoxSelector", "ContactSpec", "InitialSpec", "LawSpec
            "MaterialSpec", "MeshSpec", "OutputSpec", "PlaneSelector", "PointLoad", "SolverSpec",
            "TimeSpec", "BUILTIN_MESHES", "CELL_TYPES", "DIAGONALS"]
 
+#: Time schemes of the constitutive law (``[time] scheme``).
+TIME_SCHEMES = ("euler", "bdf2")
 #: Built-in mesh types and their dimension.
 BUILTIN_MESHES = {"interval": 1, "rectangle": 2, "box": 3}
 #: Cell types and their dimension.
@@ -192,11 +194,13 @@ class InitialSpec:
 
 @dataclass(frozen=True)
 class TimeSpec:
-    """``[time]``: final time T, step k, step halvings allowed in a row."""
+    """``[time]``: final time T, step k, step halvings allowed in a row, and the time scheme of
+    the constitutive law: ``"euler"`` (the paper's) or ``"bdf2"`` (second order; implicit laws)."""
 
     T: float
     k: float
     max_cuts: int = 12
+    scheme: str = "euler"
 
 
 @dataclass(frozen=True)
