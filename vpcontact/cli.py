@@ -6,6 +6,10 @@
   ``summary.json`` and PNG figures the scene asks for.
 * ``validate SCENE``: check a scene without running it (the mesh-dependent checks included).
 * ``list``: the bundled scenes. ``show SCENE``: the scene with every default filled in.
+* ``study convergence SCENE``: error against h, k or both, observed orders and error constants;
+  ``study cost SCENE``: error against wall time and dofs × steps for every combination of mesh,
+  step, degree and scheme, with the Pareto front (:mod:`vpcontact.study`). Both write CSV,
+  Markdown and PNG into ``--out`` (default ``output/<scene name>/study``).
 
 Exit status: 0 on success, 2 for a bad scene or command line (nothing is written), 1 when the
 simulation fails (the completed steps are kept and ``summary.json`` says ``"completed": false``).
@@ -59,6 +63,35 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("scene", help="bundled scene name or TOML file")
         p.set_defaults(func=func)
     sub.add_parser("list", help="list the bundled scenes").set_defaults(func=_list)
+    study = sub.add_parser("study", help="convergence and work-precision studies of a scene")
+    kinds = study.add_subparsers(dest="study")
+    conv = kinds.add_parser("convergence", help="error against h, k or both; observed orders")
+    conv.add_argument("--refine", choices=("both", "h", "k"), default="both",
+                      help="what to halve at each level (default: both, the paper's h = k path)")
+    conv.add_argument("--levels", type=int, default=4, help="number of refinements (default 4)")
+    conv.add_argument("--degree", type=int, choices=(1, 2), default=1)
+    conv.add_argument("--law-scheme", choices=("explicit", "implicit"),
+                      help="Euler scheme of the law (default: the scene's)")
+    conv.add_argument("--time-scheme", choices=("euler", "bdf2"), default="euler")
+    conv.set_defaults(func=_study_convergence)
+    cost = kinds.add_parser("cost", help="work-precision: error against wall time, Pareto front")
+    cost.add_argument("--levels", type=int, default=3,
+                      help="h and k levels each (levels² runs per method; default 3)")
+    cost.add_argument("--degrees", type=int, nargs="+", choices=(1, 2), default=None)
+    cost.add_argument("--schemes", nargs="+", choices=("explicit", "implicit", "bdf2"),
+                      help="explicit/implicit Euler, or BDF2 (default: the scene's, implicit, "
+                           "bdf2)")
+    cost.set_defaults(func=_study_cost)
+    for p in (conv, cost):
+        p.add_argument("scene", help="bundled scene name or TOML file (built-in mesh)")
+        p.add_argument("--cells", type=int, nargs="+", help="coarsest mesh (default: the scene's)")
+        p.add_argument("--k", type=float, help="coarsest step (default: the scene's)")
+        p.add_argument("--T", type=float, help="final time (default: the scene's)")
+        p.add_argument("--exact", help="compare with an exact solution (paper_1d) instead of a "
+                                       "finer run")
+        p.add_argument("--out", help="output folder (default: output/<scene name>/study)")
+        p.add_argument("--quiet", action="store_true", help="no line per run")
+    study.set_defaults(func=lambda args, comm: (study.print_help(), 2)[1])
     return parser
 
 
@@ -124,6 +157,55 @@ def _run(args, comm) -> int:
     out = Path(args.out or Path("output") / scene.name)
     session = Session(model, out, progress=not args.quiet)
     return session.run()
+
+
+def _study_setup(args, comm):
+    from vpcontact import study
+    scene = _load(args.scene)
+    grid = study.make_grid(scene, args.cells, args.k, args.T)
+    out = Path(args.out or Path("output") / scene.name / "study")
+    if comm.rank == 0:
+        out.mkdir(parents=True, exist_ok=True)
+    comm.barrier()
+
+    def progress(run):
+        if args.quiet or comm.rank != 0:
+            return
+        what = (f"skipped: {run.skipped}" if run.skipped else
+                f"{run.dofs} dofs, {run.steps} steps, {run.wall_time:.3g} s")
+        print(f"{run.method.label:24s} h = {run.h:<10.4g} k = {run.k:<10.4g} {what}", flush=True)
+    return scene, grid, out, progress
+
+
+def _study_convergence(args, comm) -> int:
+    from vpcontact import study, study_report
+    scene, grid, out, progress = _study_setup(args, comm)
+    method = study.Method(args.degree, args.law_scheme or scene.law.scheme, args.time_scheme)
+    runs, reference = study.convergence(scene, grid, method, args.refine, args.levels, args.exact,
+                                        comm, progress)
+    if comm.rank == 0:
+        s = study_report.write_convergence(out, scene.name, runs, args.refine, reference)
+        print(f"observed order {s['order']:.2f}, error constant max err/max(h, k) "
+              f"{s['hk_constant']:.3g}; tables and figure in {out.resolve()}")
+    return 0
+
+
+def _study_cost(args, comm) -> int:
+    from vpcontact import study, study_report
+    scene, grid, out, progress = _study_setup(args, comm)
+    methods = study.default_methods(scene)  # P1 and P2
+    if args.schemes:
+        methods = [study.Method(d, "implicit" if s == "bdf2" else s,
+                                "bdf2" if s == "bdf2" else "euler")
+                   for d in (1, 2) for s in dict.fromkeys(args.schemes)]
+    if args.degrees:
+        methods = [m for m in methods if m.degree in args.degrees]
+    runs, reference = study.cost(scene, grid, methods, args.levels, args.exact, comm, progress)
+    if comm.rank == 0:
+        report = study_report.write_cost(out, scene.name, runs, reference)
+        print("\n".join(report["advice"].values()))
+        print(f"tables and figure in {out.resolve()}")
+    return 0
 
 
 if __name__ == "__main__":

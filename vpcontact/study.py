@@ -1,0 +1,331 @@
+# SPDX-License-Identifier: MIT
+"""Convergence and work–precision studies of a scene (``vpcontact study convergence|cost``).
+
+A study runs one scene many times, each time with a *variant* of its discretisation: the mesh
+refined ``2^i`` times per direction, the step divided by ``2^j``, the displacement degree, the
+law's scheme (explicit/implicit Euler) and the time scheme (Euler/BDF2). Every run is sampled on
+the same grid: the vertices of the coarsest mesh (a vertex of every refinement, so P1 and P2
+runs are compared at their own nodal values, without interpolation) at the multiples of the
+coarsest step (every run lands on them: :func:`vpcontact.stepping.advance` ends exactly at its
+final time). The error of a run is
+
+    max over sampled times t and vertices x of |u_run(x, t) - u_ref(x, t)|   (all components),
+
+the paper's "max nodal displacement error", against the exact solution where the scene has one
+(``--exact paper_1d``: eqs. (21)-(22) for the §4.2.1 bar) or else a finer run of the most
+accurate variant. Wall time is that of the time loop on the slowest rank (mesh, forms and
+sampling excluded; each method's coarsest run is done once untimed first, since a process's first
+run of a method pays one-off costs); work is also counted as dofs × steps.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time as _time
+from dataclasses import dataclass
+from typing import Callable, Optional, Sequence
+
+import numpy as np
+from mpi4py import MPI
+
+from vpcontact.errors import InputError, VpcontactError
+from vpcontact.stepping import StepControl, advance
+
+
+@dataclass(frozen=True)
+class Method:
+    """How a run discretises the scene, apart from h and k."""
+
+    degree: int = 1
+    law_scheme: str = "implicit"   # "explicit" | "implicit" (the law's Euler)
+    time_scheme: str = "euler"     # "euler" | "bdf2"
+
+    @property
+    def label(self) -> str:
+        if self.time_scheme == "bdf2":
+            return f"P{self.degree}, BDF2"
+        return f"P{self.degree}, {self.law_scheme} Euler"
+
+
+@dataclass
+class Run:
+    """One run of a study: its variant, cost and error (None until compared)."""
+
+    method: Method
+    level_h: int
+    level_k: int
+    h: float                       # mesh size: the largest cell edge of the box grid
+    k: float
+    dofs: int = 0
+    steps: int = 0
+    newton_iterations: int = 0
+    wall_time: float = 0.0
+    error: Optional[float] = None
+    skipped: str = ""              # why the variant could not run ("" if it ran)
+    samples: Optional[np.ndarray] = dataclasses.field(default=None, repr=False)
+
+    @property
+    def work(self) -> int:
+        return self.dofs * self.steps
+
+
+# -- exact solutions --------------------------------------------------------------------------
+
+def _paper_1d(scene) -> Callable[[np.ndarray, float], np.ndarray]:
+    from vpcontact import bar1d
+    c = scene.contact
+    same = (scene.dim == 1 and scene.law.type == "linear" and scene.material.E == bar1d.YOUNG
+            and scene.law.a.value() == bar1d.G_A and scene.law.b.value() == bar1d.G_B
+            and c.type == "normal_compliance" and c.mu == bar1d.MU and c.alpha == 1.0
+            and c.gap is not None and c.gap.is_constant and c.gap.value() == bar1d.GAP
+            and tuple(scene.mesh.lower) == (0.0,) and tuple(scene.mesh.upper) == (1.0,))
+    if not same:
+        raise InputError("--exact paper_1d: the scene is not the paper's §4.2.1 bar (E = 10, "
+                         "G = -σ + 10ε, μ = 100, α = 1, g = 0.25 on (0, 1))")
+    return lambda x, t: bar1d.exact_displacement(x[:, 0], t)[:, None]
+
+
+#: Exact solutions a study can compare against, by name.
+EXACT = {"paper_1d": _paper_1d}
+
+
+# -- one run ----------------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Grid:
+    """The sampling grid: the coarsest mesh's vertices and the coarsest step's multiples."""
+
+    lower: np.ndarray
+    upper: np.ndarray
+    cells: tuple
+    times: np.ndarray
+
+    @property
+    def points(self) -> np.ndarray:
+        axes = [np.linspace(lo, hi, n + 1) for lo, hi, n in zip(self.lower, self.upper, self.cells)]
+        mesh = np.meshgrid(*axes, indexing="ij")
+        return np.stack([m.ravel() for m in mesh], axis=1)
+
+
+def make_grid(scene, cells: Optional[Sequence[int]], k: Optional[float],
+              t_final: Optional[float]) -> Grid:
+    """The coarsest level: the scene's mesh and step unless ``cells``/``k``/``t_final`` given."""
+    if scene.mesh.type == "gmsh":
+        raise InputError("studies refine built-in meshes only (the scene reads a Gmsh file)")
+    base = tuple(int(c) for c in (cells or scene.mesh.cells))
+    if len(base) != len(scene.mesh.cells) or min(base) < 1:
+        raise InputError(f"--cells needs {len(scene.mesh.cells)} positive integer(s), "
+                         f"got {list(base)}")
+    T = float(t_final if t_final is not None else scene.time.T)
+    step = float(k if k is not None else scene.time.k)
+    if not (T > 0 and step > 0 and math.isfinite(T) and math.isfinite(step)):
+        raise InputError(f"--T and --k must be positive, got T = {T}, k = {step}")
+    n = round(T / step)
+    if n < 1 or not math.isclose(n * step, T, rel_tol=1e-9):
+        raise InputError(f"k = {step:g} must divide T = {T:g}")
+    if n > 100_000:
+        raise InputError(f"too many steps at the coarsest level (T/k = {n})")
+    return Grid(np.array(scene.mesh.lower, float), np.array(scene.mesh.upper, float), base,
+                step * np.arange(1, n + 1))
+
+
+def variant_scene(scene, grid: Grid, run: Run):
+    """The scene with the run's mesh, step, degree and schemes."""
+    cells = tuple(c * 2 ** run.level_h for c in grid.cells)
+    mesh = dataclasses.replace(scene.mesh, cells=cells)
+    time = dataclasses.replace(scene.time, T=float(grid.times[-1]), k=run.k,
+                               scheme=run.method.time_scheme)
+    law = dataclasses.replace(scene.law, scheme=run.method.law_scheme)
+    return dataclasses.replace(scene, mesh=mesh, time=time, law=law, degree=run.method.degree)
+
+
+def new_run(grid: Grid, method: Method, level_h: int, level_k: int) -> Run:
+    spacing = (grid.upper - grid.lower) / np.array(grid.cells)
+    h = float(np.linalg.norm(spacing)) / 2 ** level_h
+    k = float(grid.times[0]) / 2 ** level_k
+    return Run(method, level_h, level_k, h, k)
+
+
+class _Sampler:
+    """Nodal displacements at the grid's points (every grid point is a node of every level)."""
+
+    def __init__(self, V, grid: Grid):
+        self.comm = V.mesh.comm
+        bs = V.dofmap.index_map_bs
+        dim = len(grid.cells)
+        # node coordinates through the first component (dolfinx cannot tabulate them for a
+        # vector space of dimension 1); its parent dofs are bs * node in the blocked layout
+        V0, parent = V.sub(0).collapse()
+        n_owned = V0.dofmap.index_map.size_local
+        x = V0.tabulate_dof_coordinates()[:n_owned, :dim]
+        node = np.asarray(parent[:n_owned]) // bs
+        spacing = (grid.upper - grid.lower) / np.array(grid.cells)
+        idx = (x - grid.lower) / spacing
+        nearest = np.rint(idx)
+        on = (np.all(np.abs(idx - nearest) < 1e-8, axis=1)
+              & np.all((nearest >= 0) & (nearest <= np.array(grid.cells)), axis=1))
+        self.nodes = node[on]
+        self.flat = np.ravel_multi_index(nearest[on].astype(np.int64).T,
+                                         tuple(c + 1 for c in grid.cells))
+        self.bs, self.n_points = bs, int(np.prod([c + 1 for c in grid.cells]))
+        found = self.comm.allreduce(len(self.flat), op=MPI.SUM)
+        if found != self.n_points:  # shared nodes are owned once, so this is exact
+            raise InputError(f"{found} of the {self.n_points} grid vertices are nodes of the mesh")
+
+    def __call__(self, u) -> np.ndarray:
+        values = u.x.array.reshape(-1, self.bs)[self.nodes]
+        out = np.zeros((self.n_points, self.bs))
+        out[self.flat] = values
+        return self.comm.allreduce(out, op=MPI.SUM)
+
+
+def execute(scene, grid: Grid, run: Run, comm=MPI.COMM_WORLD) -> Run:
+    """Build and run one variant; fills the run's cost and samples, or ``skipped``."""
+    from vpcontact.build import build
+    try:
+        model = build(variant_scene(scene, grid, run), comm)
+    except VpcontactError as err:  # e.g. an explicit law beyond its stability limit
+        run.skipped = str(err).split(": ")[-1]
+        return run
+    problem = model.problem
+    sample = _Sampler(problem.V, grid)
+    control = StepControl(run.k, max_cuts=scene.time.max_cuts)
+    samples, wall = [], 0.0
+    try:
+        for t in grid.times:
+            comm.barrier()
+            start = _time.perf_counter()
+            for _ in advance(problem, float(t), control):
+                pass
+            wall += _time.perf_counter() - start
+            samples.append(sample(problem.u))
+    finally:
+        problem.solver.destroy()
+    run.samples = np.array(samples)
+    run.dofs = problem.V.dofmap.index_map.size_global * problem.V.dofmap.index_map_bs
+    run.steps = len(problem.reports)
+    run.newton_iterations = sum(r.newton_iterations for r in problem.reports)
+    run.wall_time = comm.allreduce(wall, op=MPI.MAX)
+    return run
+
+
+def reference_samples(grid: Grid, exact) -> np.ndarray:
+    points = grid.points
+    return np.array([exact(points, float(t)) for t in grid.times])
+
+
+def measure(runs: Sequence[Run], reference: np.ndarray) -> None:
+    for run in runs:
+        if run.samples is not None:
+            run.error = float(np.max(np.abs(run.samples - reference)))
+
+
+# -- analysis ---------------------------------------------------------------------------------
+
+def fitted_order(params: Sequence[float], errors: Sequence[float]) -> tuple[float, float]:
+    """(p, C) of the least-squares fit error ≈ C param^p in log–log scale."""
+    p, log_c = np.polyfit(np.log(params), np.log(errors), 1)
+    return float(p), float(math.exp(log_c))
+
+
+def pareto_front(runs: Sequence[Run], rtol: float = 1e-6) -> list[Run]:
+    """Runs that no other run beats in both wall time and error, cheapest first; errors equal to
+    ``rtol`` (round-off apart: e.g. P1 and P2 with the same nodal values) do not count as better."""
+    done = sorted((r for r in runs if r.error is not None), key=lambda r: (r.wall_time, r.error))
+    front, best = [], math.inf
+    for run in done:
+        if run.error < best * (1 - rtol):
+            front.append(run)
+            best = run.error
+    return front
+
+
+# -- the two studies --------------------------------------------------------------------------
+
+REFINEMENTS = ("both", "h", "k")
+
+
+def exact_solution(scene, name: Optional[str]):
+    """u(x, t) of the exact solution ``name`` for ``scene`` (None for None); checked up front."""
+    if name is None:
+        return None
+    if name not in EXACT:
+        raise InputError(f"unknown exact solution {name!r}; known: {', '.join(EXACT)}")
+    return EXACT[name](scene)
+
+
+def _reference(scene, grid: Grid, exact: Optional[str], finer: Run, comm):
+    """Samples of the exact solution, or of the run ``finer`` (executed here)."""
+    if exact is not None:
+        return reference_samples(grid, exact_solution(scene, exact)), f"exact solution {exact!r}"
+    execute(scene, grid, finer, comm)
+    if finer.skipped:
+        raise InputError(f"the reference run ({finer.method.label}) cannot run: {finer.skipped}")
+    return finer.samples, (f"{finer.method.label} with h = {finer.h:.4g}, k = {finer.k:.4g} "
+                           f"({finer.dofs} dofs, {finer.steps} steps)")
+
+
+def convergence(scene, grid: Grid, method: Method, refine: str = "both", levels: int = 4,
+                exact: Optional[str] = None, comm=MPI.COMM_WORLD,
+                progress: Optional[Callable[[Run], None]] = None) -> tuple[list[Run], str]:
+    """Refine h, k or both by halving ``levels`` times; errors against ``exact`` or a run one
+    level finer along the same path. Returns the runs and a description of the reference."""
+    if refine not in REFINEMENTS:
+        raise InputError(f"refine must be one of {', '.join(REFINEMENTS)}, got {refine!r}")
+    if not 2 <= levels <= 8:
+        raise InputError(f"levels must be in [2, 8], got {levels}")
+    exact_solution(scene, exact)
+
+    def path(level):
+        return {"both": (level, level), "h": (level, 0), "k": (0, level)}[refine]
+
+    execute(scene, grid, new_run(grid, method, 0, 0), comm)  # warm-up: the first run is slower
+    runs = []
+    for level in range(levels):
+        run = execute(scene, grid, new_run(grid, method, *path(level)), comm)
+        if run.skipped:
+            raise InputError(f"{method.label} with k = {run.k:g}: {run.skipped}")
+        if progress is not None:
+            progress(run)
+        runs.append(run)
+    reference, label = _reference(scene, grid, exact, new_run(grid, method, *path(levels)), comm)
+    measure(runs, reference)
+    return runs, label
+
+
+def default_methods(scene) -> list[Method]:
+    """P1 and P2 with the scene's Euler scheme, implicit Euler and BDF2 (for rate-type laws)."""
+    own = scene.law.scheme
+    schemes = [(own, "euler")]
+    if scene.law.type != "elastic":
+        if own != "implicit":
+            schemes.append(("implicit", "euler"))
+        schemes.append(("implicit", "bdf2"))
+    return [Method(d, law, ts) for d in (1, 2) for law, ts in schemes]
+
+
+def cost(scene, grid: Grid, methods: Sequence[Method], levels: int = 3,
+         exact: Optional[str] = None, comm=MPI.COMM_WORLD,
+         progress: Optional[Callable[[Run], None]] = None) -> tuple[list[Run], str]:
+    """Every method on every (h, k) level pair in [0, levels)²; errors against ``exact`` or the
+    most accurate method one level finer in both h and k."""
+    if not 1 <= levels <= 6:
+        raise InputError(f"levels must be in [1, 6], got {levels}")
+    if not methods:
+        raise InputError("no method to study")
+    exact_solution(scene, exact)
+    runs = []
+    for method in methods:
+        execute(scene, grid, new_run(grid, method, 0, 0), comm)  # warm-up, not timed
+        for i in range(levels):
+            for j in range(levels):
+                run = execute(scene, grid, new_run(grid, method, i, j), comm)
+                if progress is not None:
+                    progress(run)
+                runs.append(run)
+    best = max(methods, key=lambda m: (m.degree, m.time_scheme == "bdf2",
+                                       m.law_scheme == "implicit"))
+    reference, label = _reference(scene, grid, exact, new_run(grid, best, levels, levels), comm)
+    measure(runs, reference)
+    return runs, label
