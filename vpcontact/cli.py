@@ -25,7 +25,8 @@ from typing import Optional
 
 from mpi4py import MPI
 
-from vpcontact.errors import ConvergenceError, InputError, NonFiniteStateError, VpcontactError
+from vpcontact.errors import (ConvergenceError, InputError, NonFiniteStateError, StepRejected,
+                              VpcontactError)
 
 
 def main(argv: Optional[list] = None) -> int:
@@ -38,7 +39,7 @@ def main(argv: Optional[list] = None) -> int:
     comm = MPI.COMM_WORLD
     try:
         return args.func(args, comm)
-    except (ConvergenceError, NonFiniteStateError) as err:
+    except (ConvergenceError, NonFiniteStateError, StepRejected) as err:
         _error(comm, f"the simulation failed: {err}. Try a smaller time step ([time] k), more "
                      "step halvings ([time] max_cuts) or a finer mesh.")
         return 1

@@ -38,3 +38,18 @@ class ConvergenceError(VpcontactError, RuntimeError):
 
 class NonFiniteStateError(VpcontactError, FloatingPointError):
     """The state after a step contains NaN or Inf (checked on every rank together)."""
+
+
+class StepRejected(VpcontactError):
+    """A converged step whose local time-error estimate exceeds the tolerance (rolled back).
+
+    Attributes:
+        ratio: estimate / tolerance (> 1).
+        order: order of the scheme the estimate assumed (1 or 2).
+        time: time t_n of the rejected step.
+    """
+
+    def __init__(self, ratio: float, order: int, time: float):
+        self.ratio, self.order, self.time = ratio, order, time
+        super().__init__(f"step to t = {time:.6g} rejected: local error estimate {ratio:.3g} "
+                         "times the tolerance")

@@ -23,7 +23,8 @@ from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
 from vpcontact.contact import NormalCompliance
-from vpcontact.errors import InputError, NonFiniteStateError
+from vpcontact.error_estimate import extrapolation_weights, milne_factor, past_nodes
+from vpcontact.errors import InputError, NonFiniteStateError, StepRejected
 from vpcontact.nonlinear import StepSolver
 from vpcontact.quadrature import QuadratureState
 from vpcontact.signorini import ContactMonitor, Signorini, contact_dofs, variable_bounds
@@ -41,6 +42,8 @@ class StepReport:
     time: float
     newton_iterations: int
     reason: str = ""  # SNES converged reason, e.g. CONVERGED_FNORM_RELATIVE
+    error_ratio: Optional[float] = None  # local error estimate / tolerance (when one was asked)
+    order: int = 1                       # order of the estimate's scheme (1 Euler, 2 BDF2)
 
 
 @dataclass(frozen=True)
@@ -176,6 +179,8 @@ class QuasistaticProblem:
         self.reports: list[StepReport] = []
         self._u_prev: Optional[np.ndarray] = None  # u_{n-1}, for the predictor
         self._dt_prev = 0.0
+        self._u_prev2: Optional[np.ndarray] = None  # u_{n-2}, for the BDF2 error estimate
+        self._dt_prev2 = 0.0
 
     def set_initial_stress(self, sigma0: Callable[[np.ndarray], np.ndarray]) -> None:
         """σ_0 from a function of the quadrature-point coordinates (3, N) -> (N, size) Mandel."""
@@ -195,8 +200,15 @@ class QuasistaticProblem:
         self.law.update(st.view(st.stress_old), st.view(st.strain_old), eps, self.dt,
                         st.view(st.stress), st.tangent_view())
 
-    def step(self, dt: float) -> StepReport:
-        """Advance from t_{n-1} to t_n = t_{n-1} + dt; on failure the state is rolled back."""
+    def step(self, dt: float, tolerance: Optional[float] = None) -> StepReport:
+        """Advance from t_{n-1} to t_n = t_{n-1} + dt; on failure the state is rolled back.
+
+        With ``tolerance``, a converged step whose local time-error estimate (see
+        :mod:`vpcontact.error_estimate`) exceeds ``tolerance`` · max|u_n| is rolled back too and
+        :class:`StepRejected` raised; the report of an accepted step carries estimate/tolerance.
+        The first step (and BDF2's second) has too little history for an estimate of its order:
+        it is checked at order 1 when possible, else accepted unchecked.
+        """
         if not dt > 0:
             raise InputError(f"time step must be > 0, got {dt}")
         self._check_stability(dt)
@@ -219,6 +231,11 @@ class QuasistaticProblem:
             free_first = self.solver.constant_jacobian and not self._contact_active
             its = self.solver.solve(t_new, n, try_unconstrained=free_first)
             self._check_finite(t_new, n)
+            ratio, order = (None, 1)
+            if tolerance is not None:
+                ratio, order = self._error_ratio(u_old, dt, tolerance)
+            if ratio is not None and ratio > 1.0:
+                raise StepRejected(ratio, order, t_new)
         except Exception:
             self.u.x.array[:] = u_old
             self.time.value = t_new - dt
@@ -230,11 +247,31 @@ class QuasistaticProblem:
         if hasattr(self.law, "commit"):  # laws with internal variables of their own
             self.law.commit()
         self._contact_active = self._any_contact_active()
+        self._u_prev2, self._dt_prev2 = self._u_prev, self._dt_prev
         self._u_prev, self._dt_prev = u_old, dt
         self.step_index = n
-        report = StepReport(n, t_new, its, self.solver.last_reason)
+        report = StepReport(n, t_new, its, self.solver.last_reason, ratio, order)
         self.reports.append(report)
         return report
+
+    def _error_ratio(self, u_old: np.ndarray, dt: float, tolerance: float):
+        """(local error estimate / (tolerance · max|u_n|), order), or (None, 1) without history."""
+        order = 2 if self._bdf2 is not None and self._bdf2.active else 1
+        history = [u_old] + [u for u in (self._u_prev, self._u_prev2) if u is not None]
+        order = min(order, len(history) - 1)
+        if order < 1:
+            return None, 1
+        steps = [dt, self._dt_prev, self._dt_prev2][: order + 1]
+        weights = extrapolation_weights(past_nodes(steps, order), 0.0)
+        predicted = sum(w * u for w, u in zip(weights, history))
+        u = self.u.x.array
+        comm = self.mesh.comm
+        difference = comm.allreduce(float(np.max(np.abs(u - predicted), initial=0.0)), op=MPI.MAX)
+        size = comm.allreduce(float(np.max(np.abs(u), initial=0.0)), op=MPI.MAX)
+        estimate = abs(milne_factor(order, steps)) * difference
+        if estimate == 0.0:
+            return 0.0, order
+        return estimate / (tolerance * max(size, np.finfo(float).tiny)), order
 
     def _check_stability(self, dt: float) -> None:
         """Refuse (or warn about) an explicit step beyond the law's stability limit."""

@@ -30,12 +30,13 @@ class RunRecord:
 def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Path] = None,
         name: str = "result", xdmf: bool = True, verbose: bool = True,
         max_cuts: int = 12, history: Optional[ContactHistory] = None,
+        tolerance: Optional[float] = None,
         csv_name: str = "contact_history.csv", progress=None, xdmf_every: int = 1,
         xdmf_extra=()) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
     """Advance ``problem`` to ``t_final`` with steps of at most ``dt``, writing outputs into ``out``.
 
     A step that does not converge is rejected and retried with half the step, at most
-    ``max_cuts`` times in a row (see :mod:`vpcontact.stepping`). If it still fails, the outputs of
+    ``max_cuts`` times in a row; with ``tolerance`` k also follows a local time-error estimate (see :mod:`vpcontact.stepping`). If it still fails, the outputs of
     the accepted steps are written, ``record.completed`` stays False and the error is re-raised.
 
     ``history`` records the contact nodes (default: a Signorini problem's); ``progress(step,
@@ -45,7 +46,7 @@ pairs) besides u, stress and von Mises norm.
 
     Returns the run record, the contact history (Signorini problems) and the cell stress fields.
     """
-    control = StepControl(dt, max_cuts=max_cuts)
+    control = StepControl(dt, max_cuts=max_cuts, tolerance=tolerance)
     comm = problem.mesh.comm
     cells = CellStress(problem.state, getattr(problem.law, "out_of_plane_stress", None))
     series = None

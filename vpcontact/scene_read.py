@@ -299,8 +299,8 @@ def read_initial(top: Table, dim: int | None) -> InitialSpec:
 # -- time, solver, output -------------------------------------------------------------------
 
 def read_time(top: Table) -> TimeSpec:
-    """``[time]``: T > 0, 0 < k ≤ T, max_cuts, scheme."""
-    t = top.section("time", ("T", "k", "max_cuts", "scheme"), required=True)
+    """``[time]``: T > 0, 0 < k ≤ T, max_cuts, scheme, tolerance."""
+    t = top.section("time", ("T", "k", "max_cuts", "scheme", "tolerance"), required=True)
     final, step = t.number("T", check=greater(0)), t.number("k", check=greater(0))
     if final is not None and step is not None:
         if step > final:
@@ -309,7 +309,8 @@ def read_time(top: Table) -> TimeSpec:
             t.add("k", f"too many time steps (T/k = {final / step:.3g}, at most {MAX_STEPS})")
     max_cuts = t.integer("max_cuts", 12, check=between(0, MAX_CUTS, "[]"))
     scheme = t.choice("scheme", TIME_SCHEMES, "euler")
-    return TimeSpec(final, step, max_cuts, scheme)
+    tolerance = t.number("tolerance", None, check=between(0.0, 1.0))
+    return TimeSpec(final, step, max_cuts, scheme, tolerance)
 
 
 def read_solver(top: Table) -> SolverSpec:

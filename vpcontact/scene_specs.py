@@ -195,12 +195,14 @@ class InitialSpec:
 @dataclass(frozen=True)
 class TimeSpec:
     """``[time]``: final time T, step k, step halvings allowed in a row, and the time scheme of
-    the constitutive law: ``"euler"`` (the paper's) or ``"bdf2"`` (second order; implicit laws)."""
+    the constitutive law: ``"euler"`` (the paper's) or ``"bdf2"`` (second order; implicit laws),
+    and the local time-error tolerance of adaptive stepping (k is then the largest step)."""
 
     T: float
     k: float
     max_cuts: int = 12
     scheme: str = "euler"
+    tolerance: float | None = None  # relative local time-error tolerance (adaptive k); None: off
 
 
 @dataclass(frozen=True)

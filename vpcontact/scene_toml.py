@@ -117,7 +117,7 @@ def dump(scene: Any) -> str:
     blocks += _table("initial", {"u0": scene.initial.u0, "sigma0": scene.initial.sigma0})
     time = scene.time
     blocks += _table("time", {"T": time.T, "k": time.k, "max_cuts": time.max_cuts,
-                                     "scheme": time.scheme})
+                                     "scheme": time.scheme, "tolerance": time.tolerance})
     blocks += _table("discretization", {"degree": scene.degree})
     blocks += _table("solver", {"predictor": scene.solver.predictor,
                                 "petsc_options": scene.solver.petsc_options})

@@ -49,6 +49,7 @@ class Session:
             record, history, cells = runner.run(
                 problem, scene.time.T, scene.time.k, out=self.out, name=scene.name,
                 xdmf=scene.output.xdmf, verbose=False, max_cuts=scene.time.max_cuts,
+                tolerance=scene.time.tolerance,
                 history=history, csv_name="contact.csv", progress=self._progress,
                 xdmf_every=scene.output.every, xdmf_extra=self._pressure_field(history))
         except Exception as err:  # re-raised below once the summary is on disk

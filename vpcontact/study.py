@@ -40,12 +40,13 @@ class Method:
     degree: int = 1
     law_scheme: str = "implicit"   # "explicit" | "implicit" (the law's Euler)
     time_scheme: str = "euler"     # "euler" | "bdf2"
+    tolerance: Optional[float] = None  # adaptive steps (k then the largest step), or uniform
 
     @property
     def label(self) -> str:
-        if self.time_scheme == "bdf2":
-            return f"P{self.degree}, BDF2"
-        return f"P{self.degree}, {self.law_scheme} Euler"
+        scheme = "BDF2" if self.time_scheme == "bdf2" else f"{self.law_scheme} Euler"
+        adaptive = "" if self.tolerance is None else f", adaptive {self.tolerance:g}"
+        return f"P{self.degree}, {scheme}{adaptive}"
 
 
 @dataclass
@@ -190,7 +191,7 @@ def execute(scene, grid: Grid, run: Run, comm=MPI.COMM_WORLD) -> Run:
         return run
     problem = model.problem
     sample = _Sampler(problem.V, grid)
-    control = StepControl(run.k, max_cuts=scene.time.max_cuts)
+    control = StepControl(run.k, max_cuts=scene.time.max_cuts, tolerance=run.method.tolerance)
     samples, wall = [], 0.0
     try:
         for t in grid.times:
