@@ -109,6 +109,27 @@ class _ErrorForms:
         return math.sqrt(ee) + math.sqrt(es)
 
 
+class NodalError:
+    """max_i |u_h(x_i, t) - u(x_i, t)| over the nodes x_i of ``problem``'s mesh (all ranks)."""
+
+    def __init__(self, problem: QuasistaticProblem):
+        # owned displacement dofs through the scalar collapsed subspace (bs = 1 in 1-D)
+        V0, parent = problem.V.sub(0).collapse()
+        owned = V0.dofmap.index_map.size_local
+        self.x = V0.tabulate_dof_coordinates()[:owned, 0]
+        self._parent = np.asarray(parent[:owned])
+        self._u = problem.u
+        self._comm = problem.mesh.comm
+
+    def values(self) -> np.ndarray:
+        """u_h at the owned nodes."""
+        return self._u.x.array[self._parent].copy()
+
+    def __call__(self, t: float) -> float:
+        local = np.max(np.abs(self.values() - exact_displacement(self.x, t)), initial=0.0)
+        return self._comm.allreduce(float(local), op=MPI.MAX)
+
+
 def run(r: float, t_final: float = T_FINAL, scheme: str = "explicit",
         on_step: Optional[Callable[[QuasistaticProblem], None]] = None) -> Bar1DResult:
     """Solve with h = k = r up to ``t_final`` and measure the errors of the paper's Fig. 7."""
@@ -118,18 +139,11 @@ def run(r: float, t_final: float = T_FINAL, scheme: str = "explicit",
         raise ValueError(f"r = {r} must divide both 1 and T = {t_final}")
     problem = build_problem(n_cells, scheme=scheme)
     errors = _ErrorForms(problem)
-    # Node coordinates of the owned displacement dofs (through the scalar collapsed subspace).
-    V0, parent_dofs = problem.V.sub(0).collapse()
-    owned = V0.dofmap.index_map.size_local
-    x_nodes = V0.tabulate_dof_coordinates()[:owned, 0]
-    parent_dofs = np.asarray(parent_dofs[:owned])
+    nodal = NodalError(problem)
+    x_nodes = nodal.x
     comm = problem.mesh.comm
-
-    def nodal_values():
-        return problem.u.x.array[parent_dofs].copy()
-
     times = [0.0]
-    history = [nodal_values()]
+    history = [nodal.values()]
     err_vq = errors(0.0)
     err_nodal = 0.0
     for _ in range(n_steps):
@@ -138,11 +152,9 @@ def run(r: float, t_final: float = T_FINAL, scheme: str = "explicit",
             on_step(problem)
         t = report.time
         times.append(t)
-        values = nodal_values()
-        history.append(values)
+        history.append(nodal.values())
         err_vq = max(err_vq, errors(t))
-        local = np.max(np.abs(values - exact_displacement(x_nodes, t)), initial=0.0)
-        err_nodal = max(err_nodal, comm.allreduce(local, op=MPI.MAX))
+        err_nodal = max(err_nodal, nodal(t))
 
     # Gather node histories on every rank (the 1-D meshes are tiny), sorted by x.
     all_x = np.concatenate(comm.allgather(x_nodes))
