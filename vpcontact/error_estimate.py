@@ -59,7 +59,7 @@ def milne_factor(order: int, steps: Sequence[float]) -> float:
         return t**m / math.factorial(m)
 
     local = _scheme_result(order, steps, y)  # minus y(0) = 0
-    nodes = -np.cumsum(steps[: order + 1])   # t_{n}, t_{n-1}, ... relative to t_new = 0
+    nodes = past_nodes(steps, order)
     extrapolated = float(extrapolation_weights(nodes, 0.0) @ np.array([y(t) for t in nodes]))
     denominator = local - extrapolated
     return local / denominator if denominator != 0.0 else 1.0
