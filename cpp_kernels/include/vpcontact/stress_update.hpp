@@ -381,7 +381,7 @@ void implicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
     throw std::invalid_argument("dt: dt/mu_star overflows, got dt = " + detail::format(dt));
   constexpr int G = YieldSet<N>::num_classes;
   const detail::Weights<N> weights(set, beta);
-  const detail::Vector<N> zero{};
+  const detail::Matrix<N> C = elasticity_matrix<N>(elasticity); // the elastic points' tangent
   std::array<double, G> r, r_over_beta;
   for (int g = 0; g < G; ++g)
   {
@@ -407,8 +407,7 @@ void implicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
     if (!m.active)
     {
       detail::store(tr, step.sigma_new + p * N);
-      if (step.tangent) // E, written as sum_g e_g P_g (faster than a copy of C)
-        detail::rank_one_plus_classes<N>(0.0, zero, zero, set.class_e, step.tangent + p * N * N);
+      detail::store_if(C, step.tangent, p * N * N);
       continue;
     }
     // Per class: m_g = (c + t r_g)/D_g; sigma_n = M sum_g m_g part[g].

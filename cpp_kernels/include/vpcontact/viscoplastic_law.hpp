@@ -133,12 +133,19 @@ struct Perzyna
   void G(const double* sigma, const double*, double* g) const noexcept
   {
     detail::Vector<N> tau;
-    project<N>(set, sigma, tau.data());
-    detail::Vector<N> w = detail::multiply<N>(set.Q, detail::load<N>(sigma));
-    const detail::Vector<N> wt = detail::multiply<N>(set.Q, tau);
+    if (project<N>(set, sigma, tau.data()) == 0) // sigma in K: no viscoplastic flow
+    {
+      for (int i = 0; i < N; ++i)
+        g[i] = 0.0;
+      return;
+    }
+    // E applied per eigenspace of the yield set (E and Y share them): O(n), not O(n^2).
+    std::array<double, YieldSet<N>::num_classes> coefficient;
+    for (int c = 0; c < YieldSet<N>::num_classes; ++c)
+      coefficient[c] = -set.class_e[c] / mu_star;
     for (int i = 0; i < N; ++i)
-      w[i] = -set.e[i] * (w[i] - wt[i]) / mu_star;
-    detail::store(detail::multiply_transposed<N>(set.Q, w), g);
+      tau[i] = sigma[i] - tau[i];
+    detail::store(set.apply(coefficient, tau), g);
   }
 
   /// J = -(1/mu*) E (I - dP_K/dsigma); on the boundary of K the derivative

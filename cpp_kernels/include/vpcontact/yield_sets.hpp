@@ -425,16 +425,33 @@ inline Multiplier<N> solve_multiplier(const YieldSet<N>& set, const Weights<N>& 
   t = (std::sqrt(sum_a2) - m.c) * sum_a2 / sum_a2s;
   for (; m.iterations < max_iterations; ++m.iterations)
   {
+    // Here every class is active (G = 2): one division serves both 1/D_g
+    // unless D_0 D_1 under- or overflows (the iteration is latency-bound, and
+    // a division costs about as much as the rest of the step).
+    std::array<double, G> inverse_D;
+    if constexpr (G == 2)
+    {
+      const double D0 = m.c + t * s[0], D1 = m.c + t * s[1];
+      const double product = D0 * D1;
+      if (std::isnormal(product))
+      {
+        const double inverse = 1.0 / product;
+        inverse_D = {D1 * inverse, D0 * inverse};
+      }
+      else
+        inverse_D = {1.0 / D0, 1.0 / D1};
+    }
+    else
+    {
+      for (int g = 0; g < G; ++g)
+        inverse_D[g] = 1.0 / (m.c + t * s[g]);
+    }
     double rho2 = 0.0, slope = 0.0;
     for (int g = 0; g < G; ++g)
     {
-      if (a2[g] > 0.0)
-      {
-        const double inverse_Dg = 1.0 / (m.c + t * s[g]);
-        const double x2 = a2[g] * inverse_Dg * inverse_Dg;
-        rho2 += x2;
-        slope += x2 * s[g] * inverse_Dg;
-      }
+      const double x2 = a2[g] * inverse_D[g] * inverse_D[g];
+      rho2 += x2;
+      slope += x2 * s[g] * inverse_D[g];
     }
     const double step = (std::sqrt(rho2) - 1.0) * rho2 / slope;
     if (step > 0.0)
