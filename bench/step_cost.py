@@ -12,6 +12,11 @@ t = 0 with k = 0.02 s. Per step: wall time and its split (kernel, residual assem
 assembly, linear solves + VI work), Newton iterations, factorizations.
 
     .venv/bin/python bench/step_cost.py [--sizes2d 16 32 64 128] [--sizes3d 4 6 8 12 16] [--ranks 2]
+        [--mpi-size 8] [--mu-star MU] [--sigma-y SY] [-o KEY=VALUE ...] [--out FILE]
+
+``--mu-star``/``--sigma-y`` change the paper's μ* = 200 and σ_Y = √10 (a larger μ* lowers the
+stiffness contrast k E/μ* of the plastic tangent, which decides whether multigrid works);
+``-o`` passes PETSc options, e.g. ``-o vpcontact_vi_linear=lagged_gamg -o lagged_pc_type=ml``.
 
 writes bench/results/step_cost.json (and prints it). ``--single DIM N`` runs one size in this
 process (what the driver launches, serially or under mpirun) and prints its JSON record.
@@ -28,6 +33,7 @@ import shutil
 import subprocess
 import sys
 import time
+from typing import Optional
 from pathlib import Path
 
 import numpy as np
@@ -39,21 +45,27 @@ WINDOWS = {2: (0.4, 0.5), 3: (0.3, 0.4)}  # timed interval per dimension [s]
 RUN_IN_STEP, STEP = 0.02, 0.01
 
 
-def single(dim: int, n: int, options: dict) -> dict:
-    """Run one size in this process; the record of its timed window."""
+def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
+           mu_star: Optional[float] = None) -> dict:
+    """Run one size in this process; the record of its timed window (``sigma_y``: the paper's
+    √10 by default; ``inf`` makes the body elastic)."""
     from vpcontact import paper_signorini as paper
     from vpcontact.stepping import StepControl, advance
 
+    sigma_y = paper.SIGMA_Y if sigma_y is None else sigma_y
+    mu_star = paper.MU_STAR if mu_star is None else mu_star
+
     comm = MPI.COMM_WORLD
-    problem = (paper.signorini_2d(n, petsc_options=options) if dim == 2
-               else paper.signorini_3d(3 * n, n, n, petsc_options=options))
+    problem = (paper.signorini_2d(n, petsc_options=options, sigma_y=sigma_y) if dim == 2
+               else paper.signorini_3d(3 * n, n, n, petsc_options=options, sigma_y=sigma_y,
+                                       mu_star=mu_star))
     t0, t1 = WINDOWS[dim]
     list(advance(problem, t0, StepControl(RUN_IN_STEP)))
     solver = problem.solver
     solver.timings.update({k: 0.0 for k in solver.timings})
     its0 = solver.total_iterations
     lagged = solver.lagged_lu
-    fact0 = lagged.factorizations if lagged is not None else 0
+    counters0 = lagged.counters() if lagged is not None else {}
     comm.barrier()
     start = time.perf_counter()
     steps = len(list(advance(problem, t1, StepControl(STEP))))
@@ -63,21 +75,37 @@ def single(dim: int, n: int, options: dict) -> dict:
     rss = comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, op=MPI.SUM)
     V = problem.V
     dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
-    return {"dim": dim, "n": n, "dofs": dofs, "ranks": comm.size, "steps": steps,
+    return {"dim": dim, "n": n, "sigma_y": _json_float(sigma_y),
+            "mu_star": mu_star, "dofs": dofs, "ranks": comm.size, "steps": steps,
             "seconds_per_step": wall / steps,
             "seconds_per_step_split": {
                 "kernel": t["kernel"], "residual_assembly": t["residual"],
                 "jacobian_assembly": t["jacobian"],
                 "linear_solve_and_vi": t["snes"] - t["kernel"] - t["residual"] - t["jacobian"]},
             "newton_iterations_per_step": (solver.total_iterations - its0) / steps,
-            "factorizations_per_step": (None if lagged is None
-                                        else (lagged.factorizations - fact0) / steps),
+            "factorizations_per_step": (None if lagged is None or "factorizations" not in counters0
+                                        else (lagged.factorizations - counters0["factorizations"])
+                                        / steps),
+            "vi_linear_counters_per_step": {
+                k: (v - counters0[k]) / steps
+                for k, v in (lagged.counters() if lagged else {}).items()
+                if not isinstance(v, str)},
             "peak_memory_bytes": rss, "peak_memory_bytes_per_dof": rss / dofs}
 
 
-def launch(dim: int, n: int, ranks: int, options: list) -> dict:
+def _json_float(x: Optional[float]):
+    """x for a strict JSON file (infinity as the string "inf")."""
+    return x if x is None or np.isfinite(x) else str(x)
+
+
+def launch(dim: int, n: int, ranks: int, options: list, sigma_y: Optional[float] = None,
+           mu_star: Optional[float] = None) -> dict:
     """Run ``--single dim n`` in a fresh process (under mpirun when ranks > 1)."""
     cmd = [sys.executable, __file__, "--single", str(dim), str(n)]
+    if sigma_y is not None:
+        cmd += ["--sigma-y", repr(sigma_y)]
+    if mu_star is not None:
+        cmd += ["--mu-star", repr(mu_star)]
     for o in options:
         cmd += ["-o", o]
     if ranks > 1:
@@ -98,10 +126,11 @@ def launch(dim: int, n: int, ranks: int, options: list) -> dict:
     return json.loads(record[len("RECORD "):])
 
 
-def exponent(records: list) -> float:
-    """Fitted p in seconds per step ~ dofs^p."""
+def exponent(records: list, part: Optional[str] = None) -> float:
+    """Fitted p in seconds per step ~ dofs^p (of one part of the split when ``part`` is given)."""
     dofs = np.array([r["dofs"] for r in records], dtype=float)
-    cost = np.array([r["seconds_per_step"] for r in records])
+    cost = np.array([r["seconds_per_step"] if part is None else r["seconds_per_step_split"][part]
+                     for r in records])
     return float(np.polyfit(np.log(dofs), np.log(cost), 1)[0])
 
 
@@ -118,31 +147,42 @@ def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes2d", type=int, nargs="*", default=[16, 32, 64, 128])
     parser.add_argument("--sizes3d", type=int, nargs="*", default=[4, 6, 8, 12, 16])
-    parser.add_argument("--ranks", type=int, default=2, help="ranks of the speed-up run (3-D, n=8)")
+    parser.add_argument("--ranks", type=int, default=2, help="ranks of the speed-up run (3-D)")
     parser.add_argument("-o", dest="options", action="append", default=[], metavar="KEY=VALUE",
                         help="PETSc option for the step's SNES")
+    parser.add_argument("--sigma-y", type=float, default=None,
+                        help="yield stress (default: the paper's √10; inf: an elastic body)")
+    parser.add_argument("--mu-star", type=float, default=None,
+                        help="3-D viscosity μ* (default: the paper's 200; larger: softer contrast)")
+    parser.add_argument("--mpi-size", type=int, default=8, help="n of the speed-up run (3n×n×n)")
     parser.add_argument("--single", nargs=2, type=int, metavar=("DIM", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "step_cost.json"))
     args = parser.parse_args(argv)
     if any("=" not in o for o in args.options):
         parser.error("-o takes KEY=VALUE")
     if args.single:
-        record = single(*args.single, dict(o.split("=", 1) for o in args.options))
+        record = single(*args.single, dict(o.split("=", 1) for o in args.options), args.sigma_y,
+                        args.mu_star)
         if MPI.COMM_WORLD.rank == 0:
             print("RECORD " + json.dumps(record), flush=True)
         return 0
 
     result = {"benchmark": "step_cost", "machine": machine(MPI.COMM_WORLD),
               "step": STEP, "windows": {str(d): w for d, w in WINDOWS.items()},
-              "petsc_options": args.options}
+              "petsc_options": args.options, "sigma_y": _json_float(args.sigma_y),
+              "mu_star": args.mu_star}
     for dim, sizes in ((2, args.sizes2d), (3, args.sizes3d)):
-        records = [launch(dim, n, 1, args.options) for n in sizes]
+        records = [launch(dim, n, 1, args.options, args.sigma_y, args.mu_star) for n in sizes]
         result[f"{dim}d"] = {"records": records,
                              "exponent": exponent(records) if len(records) > 1 else None,
+                             "split_exponents": ({part: exponent(records, part)
+                                                  for part in records[0]["seconds_per_step_split"]}
+                                                 if len(records) > 1 else None),
                              "marginal_memory_bytes_per_dof": marginal_memory(records)}
     if args.ranks > 1:
-        serial = launch(3, 8, 1, args.options)
-        parallel = launch(3, 8, args.ranks, args.options)
+        serial = launch(3, args.mpi_size, 1, args.options, args.sigma_y, args.mu_star)
+        parallel = launch(3, args.mpi_size, args.ranks, args.options, args.sigma_y,
+                          args.mu_star)
         speedup = serial["seconds_per_step"] / parallel["seconds_per_step"]
         result["mpi"] = {"serial": serial, "parallel": parallel, "speedup": speedup,
                          "target speedup >= 1.6": bool(speedup >= 1.6)}
