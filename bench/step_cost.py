@@ -73,6 +73,9 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
     wall = time.perf_counter() - start
     t = {k: comm.allreduce(v, op=MPI.MAX) / steps for k, v in solver.timings.items()}
     rss = comm.allreduce(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024, op=MPI.SUM)
+    counters = {k: (v - counters0[k]) / steps  # the lagged VI solver's, per step
+                for k, v in (lagged.counters() if lagged is not None else {}).items()
+                if not isinstance(v, str)}
     V = problem.V
     dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
     return {"dim": dim, "n": n, "sigma_y": _json_float(sigma_y),
@@ -83,13 +86,8 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
                 "jacobian_assembly": t["jacobian"],
                 "linear_solve_and_vi": t["snes"] - t["kernel"] - t["residual"] - t["jacobian"]},
             "newton_iterations_per_step": (solver.total_iterations - its0) / steps,
-            "factorizations_per_step": (None if lagged is None or "factorizations" not in counters0
-                                        else (lagged.factorizations - counters0["factorizations"])
-                                        / steps),
-            "vi_linear_counters_per_step": {
-                k: (v - counters0[k]) / steps
-                for k, v in (lagged.counters() if lagged else {}).items()
-                if not isinstance(v, str)},
+            "factorizations_per_step": counters.get("factorizations"),
+            "vi_linear_counters_per_step": counters,
             "peak_memory_bytes": rss, "peak_memory_bytes_per_dof": rss / dofs}
 
 

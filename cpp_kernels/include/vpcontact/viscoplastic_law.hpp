@@ -120,6 +120,8 @@ struct Perzyna
   YieldSet<N> set;
   /// Viscosity mu* > 0.
   double mu_star;
+  /// -e_g/mu* per eigenspace class of E: G = sum_g flow_g P_g (sigma - P_K sigma).
+  std::array<double, YieldSet<N>::num_classes> flow;
 
   /// @param yield_set The yield set (with E).
   /// @param viscosity mu* > 0, finite.
@@ -127,6 +129,8 @@ struct Perzyna
   Perzyna(const YieldSet<N>& yield_set, double viscosity) : set(yield_set), mu_star(viscosity)
   {
     detail::require_positive_finite("mu_star", viscosity);
+    for (int c = 0; c < YieldSet<N>::num_classes; ++c)
+      flow[c] = -set.class_e[c] / mu_star;
   }
 
   /// g = -(1/mu*) E (sigma - P_K sigma).
@@ -140,12 +144,9 @@ struct Perzyna
       return;
     }
     // E applied per eigenspace of the yield set (E and Y share them): O(n), not O(n^2).
-    std::array<double, YieldSet<N>::num_classes> coefficient;
-    for (int c = 0; c < YieldSet<N>::num_classes; ++c)
-      coefficient[c] = -set.class_e[c] / mu_star;
     for (int i = 0; i < N; ++i)
       tau[i] = sigma[i] - tau[i];
-    detail::store(set.apply(coefficient, tau), g);
+    detail::store(set.apply(flow, tau), g);
   }
 
   /// J = -(1/mu*) E (I - dP_K/dsigma); on the boundary of K the derivative
