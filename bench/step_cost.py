@@ -56,9 +56,9 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
     mu_star = paper.MU_STAR if mu_star is None else mu_star
 
     comm = MPI.COMM_WORLD
-    problem = (paper.signorini_2d(n, petsc_options=options, sigma_y=sigma_y) if dim == 2
-               else paper.signorini_3d(3 * n, n, n, petsc_options=options, sigma_y=sigma_y,
-                                       mu_star=mu_star))
+    data = {"petsc_options": options, "sigma_y": sigma_y, "mu_star": mu_star}
+    problem = (paper.signorini_2d(n, **data) if dim == 2
+               else paper.signorini_3d(3 * n, n, n, **data))
     t0, t1 = WINDOWS[dim]
     list(advance(problem, t0, StepControl(RUN_IN_STEP)))
     solver = problem.solver
@@ -96,16 +96,10 @@ def _json_float(x: Optional[float]):
     return x if x is None or np.isfinite(x) else str(x)
 
 
-def launch(dim: int, n: int, ranks: int, options: list, sigma_y: Optional[float] = None,
-           mu_star: Optional[float] = None) -> dict:
-    """Run ``--single dim n`` in a fresh process (under mpirun when ranks > 1)."""
-    cmd = [sys.executable, __file__, "--single", str(dim), str(n)]
-    if sigma_y is not None:
-        cmd += ["--sigma-y", repr(sigma_y)]
-    if mu_star is not None:
-        cmd += ["--mu-star", repr(mu_star)]
-    for o in options:
-        cmd += ["-o", o]
+def launch(dim: int, n: int, ranks: int, passed_on: list) -> dict:
+    """Run ``--single dim n`` in a fresh process (under mpirun when ranks > 1), with the
+    driver's data and PETSc options (``passed_on``: their command-line arguments)."""
+    cmd = [sys.executable, __file__, "--single", str(dim), str(n), *passed_on]
     if ranks > 1:
         mpirun = shutil.which("mpirun")
         if mpirun is None:
@@ -151,7 +145,7 @@ def main(argv=None) -> int:
     parser.add_argument("--sigma-y", type=float, default=None,
                         help="yield stress (default: the paper's √10; inf: an elastic body)")
     parser.add_argument("--mu-star", type=float, default=None,
-                        help="3-D viscosity μ* (default: the paper's 200; larger: softer contrast)")
+                        help="viscosity μ* (default: the paper's 200; larger: softer contrast)")
     parser.add_argument("--mpi-size", type=int, default=8, help="n of the speed-up run (3n×n×n)")
     parser.add_argument("--single", nargs=2, type=int, metavar=("DIM", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "step_cost.json"))
@@ -169,8 +163,12 @@ def main(argv=None) -> int:
               "step": STEP, "windows": {str(d): w for d, w in WINDOWS.items()},
               "petsc_options": args.options, "sigma_y": _json_float(args.sigma_y),
               "mu_star": args.mu_star}
+    passed_on = [arg for o in args.options for arg in ("-o", o)]
+    for flag, value in (("--sigma-y", args.sigma_y), ("--mu-star", args.mu_star)):
+        if value is not None:
+            passed_on += [flag, repr(value)]
     for dim, sizes in ((2, args.sizes2d), (3, args.sizes3d)):
-        records = [launch(dim, n, 1, args.options, args.sigma_y, args.mu_star) for n in sizes]
+        records = [launch(dim, n, 1, passed_on) for n in sizes]
         result[f"{dim}d"] = {"records": records,
                              "exponent": exponent(records) if len(records) > 1 else None,
                              "split_exponents": ({part: exponent(records, part)
@@ -178,9 +176,8 @@ def main(argv=None) -> int:
                                                  if len(records) > 1 else None),
                              "marginal_memory_bytes_per_dof": marginal_memory(records)}
     if args.ranks > 1:
-        serial = launch(3, args.mpi_size, 1, args.options, args.sigma_y, args.mu_star)
-        parallel = launch(3, args.mpi_size, args.ranks, args.options, args.sigma_y,
-                          args.mu_star)
+        serial = launch(3, args.mpi_size, 1, passed_on)
+        parallel = launch(3, args.mpi_size, args.ranks, passed_on)
         speedup = serial["seconds_per_step"] / parallel["seconds_per_step"]
         result["mpi"] = {"serial": serial, "parallel": parallel, "speedup": speedup,
                          "target speedup >= 1.6": bool(speedup >= 1.6)}

@@ -43,14 +43,16 @@ def obstacle_2d(x: np.ndarray) -> np.ndarray:
 
 def signorini_2d(n: int = 32, scheme: str = "implicit", degree: int = 1, comm=MPI.COMM_WORLD,
                  petsc_options=None, sigma_y: float = SIGMA_Y,
-                 time_scheme: str = "euler") -> QuasistaticProblem:
-    """§4.1.1: Ω = (0,1)², clamped on top, f_0 = (0, -10t), plane stress, obstacle below."""
+                 time_scheme: str = "euler", mu_star: float = MU_STAR) -> QuasistaticProblem:
+    """§4.1.1: Ω = (0,1)², clamped on top, f_0 = (0, -10t), plane stress, obstacle below.
+
+    ``sigma_y`` and ``mu_star`` default to the paper's (see :func:`signorini_3d`)."""
     mesh = dmesh.create_unit_square(comm, n, n)
     tags = tag_facets(mesh, {
         CLAMP: lambda x: np.isclose(x[1], 1.0),
         TRACTION: lambda x: np.isclose(x[0], 0.0) | np.isclose(x[0], 1.0),
         CONTACT: lambda x: np.isclose(x[1], 0.0)})
-    law = Perzyna(Elasticity("plane_stress", YOUNG, POISSON), sigma_y=sigma_y, mu_star=MU_STAR,
+    law = Perzyna(Elasticity("plane_stress", YOUNG, POISSON), sigma_y=sigma_y, mu_star=mu_star,
                   scheme=scheme)
     loads = Loads(body_force=lambda x, t: ufl.as_vector([0.0, -10.0 * t]))  # f_2 = 0 on Γ2
     return QuasistaticProblem(mesh, tags, law, clamped_tag=CLAMP, loads=loads,
