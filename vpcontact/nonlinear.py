@@ -198,17 +198,14 @@ class StepSolver:
 
     def _use_lagged_solver(self) -> None:
         """Reduced VI systems solved with a kept full-size preconditioner (vpcontact.vi_linear)."""
-        opts = PETSc.Options()
-        inner = {k: v for k, v in self._options.items() if k.startswith("lagged_")}
-        for key, value in inner.items():
-            opts[self.prefix + key] = value
+        inner = {k[len("lagged_"):]: v for k, v in self._options.items()
+                 if k.startswith("lagged_")}
         if self._vi_linear == "lagged_lu":
-            self.lagged_lu = LaggedDirectSolve(self.snes, self._A, self.prefix + "lagged_")
+            self.lagged_lu = LaggedDirectSolve(self.snes, self._A, self.prefix + "lagged_", inner)
             self.lagged_lu.lag_allowed = self._lag_allowed
         else:
             self.lagged_lu = LaggedMultigrid(self.snes, self._A, self.prefix + "lagged_",
-                                             rigid_body_modes(self.u.function_space))
-        _forget(self.prefix, inner)
+                                             rigid_body_modes(self.u.function_space), inner)
         ksp = self.snes.getKSP()
         ksp.setType("python")
         ksp.setPythonContext(self.lagged_lu)
