@@ -75,10 +75,9 @@ class _ReducedSolve:
         self.jacobian = jacobian
         self.inner = inner
         self.matrix: Optional[PETSc.Mat] = None  # M, with J's pattern (copied at first use)
-        self.krylov = PETSc.KSP().create(jacobian.getComm())  # GMRES on J_II
-        self.krylov.setType("gmres")
-        self.krylov.setGMRESRestart(restart)
-        self.krylov.setPCSide(PETSc.PC.Side.RIGHT)  # converges on the true residual
+        self.krylov = PETSc.KSP().create(jacobian.getComm())  # GMRES (or CG) on J_II
+        self._restart = restart
+        self.use_krylov("gmres")
         kpc = self.krylov.getPC()
         kpc.setType("python")
         kpc.setPythonContext(_EmbeddedInner(self))
@@ -93,9 +92,23 @@ class _ReducedSolve:
         self._inactive = (self.snes.getVIInactiveSet().getIndices() - rstart).astype(np.int32)
         return rstart
 
-    def _gmres(self, reduced: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float, atol: float,
-               max_it: int) -> bool:
-        """GMRES on J_II x = b preconditioned by the inner solver; True when it converged."""
+    def use_krylov(self, kind: str) -> None:
+        """GMRES (right-preconditioned) or CG (left-preconditioned: for a symmetric J_II and
+        inner solver); both stop on the unpreconditioned residual."""
+        if self.krylov.getType() == kind:
+            return
+        self.krylov.setType(kind)
+        if kind == "gmres":
+            self.krylov.setGMRESRestart(self._restart)
+            self.krylov.setPCSide(PETSc.PC.Side.RIGHT)  # converges on the true residual
+        else:
+            self.krylov.setPCSide(PETSc.PC.Side.LEFT)
+            self.krylov.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
+
+    def _krylov(self, reduced: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float, atol: float,
+                max_it: int) -> bool:
+        """GMRES (or CG, see :meth:`use_krylov`) on J_II x = b preconditioned by the inner
+        solver; True when it converged."""
         if self._krylov_size != reduced.getSizes():
             self.krylov.reset()  # PETSc refuses operators of another size after use
             self._krylov_size = reduced.getSizes()
@@ -187,7 +200,7 @@ class LaggedDirectSolve(_ReducedSolve):
         reduced, _ = ksp.getOperators()
         rstart = self._read_inactive_set()
         if self._factored and not self._skip_lagged and self.lag_allowed():
-            if self._gmres(reduced, b, x, rtol, atol, self.lagged_iterations):
+            if self._krylov(reduced, b, x, rtol, atol, self.lagged_iterations):
                 self.lagged_solves += 1
                 ksp.setIterationNumber(self.krylov.getIterationNumber())
                 ksp.setConvergedReason(_KSP_REASON.CONVERGED_RTOL)
@@ -243,6 +256,12 @@ class LaggedMultigrid(_ReducedSolve):
     82 → 180 GMRES iterations per solve from 6 075 to 18 759 dofs, against 36 → 42 with
     recomputed prolongations).
 
+    CG replaces GMRES when M is symmetric (the 3-D tangents; GAMG's V-cycle with Chebyshev
+    smoothing is symmetric too): on the paper's 3-D test at μ* = 2e5 over ten steps it needed
+    197 instead of 292 iterations per step at 80 703 dofs. A CG solve that fails (an inner
+    cycle that is not positive definite, e.g. with user smoothers) is redone with GMRES, which
+    is then kept.
+
     Args:
         snes, jacobian: as for :class:`LaggedDirectSolve`.
         options_prefix: prefix of the inner multigrid (``<prefix>pc_gamg_...`` etc.).
@@ -275,6 +294,7 @@ class LaggedMultigrid(_ReducedSolve):
         self.rebuild_growth = float(rebuild_growth)
         self._ready = False
         self._fresh_iterations = 0  # iterations of the first solve with the current hierarchy
+        self.allow_cg = True  # False once CG failed (then GMRES for good)
         self.setups = 0  # multigrid hierarchies built
         self.krylov_iterations = 0
 
@@ -294,14 +314,22 @@ class LaggedMultigrid(_ReducedSolve):
         fresh = not self._ready
         if fresh:
             self._setup(rstart)
-        converged = self._gmres(reduced, b, x, rtol, atol, self.max_iterations)
+        converged = self._krylov(reduced, b, x, rtol, atol, self.max_iterations)
         self.krylov_iterations += self.krylov.getIterationNumber()
         if not converged and not fresh:
             self._setup(rstart)
             x.set(0.0)
-            converged = self._gmres(reduced, b, x, rtol, atol, self.max_iterations)
+            converged = self._krylov(reduced, b, x, rtol, atol, self.max_iterations)
             self.krylov_iterations += self.krylov.getIterationNumber()
             fresh = True
+        if not converged and self.krylov.getType() == "cg":
+            # An inner cycle that is not positive definite (e.g. user smoothers): GMRES from
+            # now on.
+            self.allow_cg = False
+            self.use_krylov("gmres")
+            x.set(0.0)
+            converged = self._krylov(reduced, b, x, rtol, atol, self.max_iterations)
+            self.krylov_iterations += self.krylov.getIterationNumber()
         its = self.krylov.getIterationNumber()
         if fresh:
             self._fresh_iterations = its
@@ -316,6 +344,9 @@ class LaggedMultigrid(_ReducedSolve):
         self._rebuild_matrix(rstart)
         if self.near_nullspace is not None:
             self.matrix.setNearNullSpace(self.near_nullspace)
+        scale = self.matrix.norm(PETSc.NormType.INFINITY)
+        symmetric = self.matrix.isSymmetric(1e-12 * scale)
+        self.use_krylov("cg" if self.allow_cg and symmetric else "gmres")
         self.inner.setOperators(self.matrix)
         with options_in_database(self.prefix, self.options):
             self.inner.setUp()
