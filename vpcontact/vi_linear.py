@@ -126,6 +126,11 @@ class _ReducedSolve:
         y.array[:] = self._full_sol.array_r[self._inactive]
         self.substitutions += 1
 
+    def _matrix_is_symmetric(self) -> bool:
+        """M symmetric to round-off (relative to its largest row sum)."""
+        scale = self.matrix.norm(PETSc.NormType.INFINITY)
+        return self.matrix.isSymmetric(1e-12 * scale)
+
     def _rebuild_matrix(self, rstart: int) -> None:
         """M = the current J with the rows and columns of the active set set to the identity."""
         if self.matrix is None:
@@ -225,8 +230,7 @@ class LaggedDirectSolve(_ReducedSolve):
         factorization; the 3-D von Mises tangent is symmetric, the plane-stress one is not (the
         implicit update's metric is not proportional to E⁻¹ there), and a user law need not
         be: checked at every factorization."""
-        scale = self.matrix.norm(PETSc.NormType.INFINITY)
-        kind = "cholesky" if self.matrix.isSymmetric(1e-12 * scale) else "lu"
+        kind = "cholesky" if self._matrix_is_symmetric() else "lu"
         pc = self.inner.getPC()
         if pc.getType() != kind:
             solver = pc.getFactorSolverType()
@@ -344,9 +348,7 @@ class LaggedMultigrid(_ReducedSolve):
         self._rebuild_matrix(rstart)
         if self.near_nullspace is not None:
             self.matrix.setNearNullSpace(self.near_nullspace)
-        scale = self.matrix.norm(PETSc.NormType.INFINITY)
-        symmetric = self.matrix.isSymmetric(1e-12 * scale)
-        self.use_krylov("cg" if self.allow_cg and symmetric else "gmres")
+        self.use_krylov("cg" if self.allow_cg and self._matrix_is_symmetric() else "gmres")
         self.inner.setOperators(self.matrix)
         with options_in_database(self.prefix, self.options):
             self.inner.setUp()
