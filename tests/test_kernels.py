@@ -792,3 +792,27 @@ def test_cpp_user_law_example(tmp_path):
     subprocess.run(["g++", *flags, f"-I{include}", str(EXAMPLE), "-o", str(exe)], check=True)
     result = subprocess.run([str(exe)], capture_output=True, text=True)
     assert result.returncode == 0, result.stdout + result.stderr
+
+
+@pytest.mark.parametrize("scheme", ["implicit", "explicit"])
+@pytest.mark.parametrize("model", ["1d", "plane_stress", "3d"])
+@pytest.mark.parametrize("which", ["sigma_old", "eps_old", "eps_new"])
+@pytest.mark.parametrize("bad", [math.nan, math.inf, -math.inf])
+def test_stress_updates_name_the_first_non_finite_input(which, model, scheme, bad):
+    """The C++ updates check their inputs (the Python wrapper no longer does): a non-finite
+    entry is reported with its array and point, before anything is written."""
+    n = K.mandel_size(model)
+    arrays = {name: np.zeros((1030, n)) for name in ("sigma_old", "eps_old", "eps_new")}
+    arrays[which][1027, n - 1] = bad  # past the first block of the scan, in its tail
+    arrays[which][1029, 0] = bad
+    out = (np.full((1030, n), 7.0), np.full((1030, n, n), 7.0))
+    common = dict(dt=0.1, E=1.0, model=model, out=out)
+    calls = [lambda: K.stress_update_mandel(*arrays.values(), sigma_y=1.0, mu_star=1.0,
+                                            scheme=scheme, **common),
+             lambda: K.stress_update_linear_mandel(*arrays.values(), a=-1.0, b=1.0,
+                                                   scheme=scheme, **common)]
+    for call in calls:
+        with pytest.raises(ValueError, match=rf"{which}: contains non-finite values "
+                                             r"\(first at point 1027\)"):
+            call()
+        assert np.all(out[0] == 7.0) and np.all(out[1] == 7.0)

@@ -125,12 +125,14 @@ def _elastic(model: str, E: object, nu: object) -> Tuple[float, float]:
     return young, poisson
 
 
-def _real_array(name: str, x: npt.ArrayLike) -> np.ndarray:
+def _real_array(name: str, x: npt.ArrayLike, check_finite: bool = True) -> np.ndarray:
+    """``x`` as a C-contiguous float64 array; ``check_finite=False`` for arrays whose kernel
+    checks finiteness itself (the stress updates, in the same C++ pass that reads them)."""
     a = np.asarray(x)
     if a.dtype.kind not in "fiu":
         raise ValueError(f"{name}: expected real numbers, got dtype {a.dtype}")
     a = np.ascontiguousarray(a, dtype=np.float64)
-    if not np.all(np.isfinite(a)):
+    if check_finite and not np.all(np.isfinite(a)):
         raise ValueError(f"{name}: contains non-finite values")
     return a
 
@@ -156,8 +158,9 @@ def _tensors(name: str, x: npt.ArrayLike, model: str) -> np.ndarray:
     return a
 
 
-def _mandel(name: str, x: npt.ArrayLike, model: str, num_points: Optional[int] = None):
-    a = _real_array(name, x)
+def _mandel(name: str, x: npt.ArrayLike, model: str, num_points: Optional[int] = None,
+            check_finite: bool = True):
+    a = _real_array(name, x, check_finite)
     n = mandel_size(model)
     if a.ndim != 2 or a.shape[1] != n:
         raise ValueError(f"{name}: expected shape (N, {n}) for model {model!r}, got {a.shape}")
@@ -402,7 +405,9 @@ def project(
 
 def _step_inputs(model, sigma_old, eps_old, eps_new):
     names = ("sigma_old", "eps_old", "eps_new")
-    arrays = tuple(_mandel(nm, a, model) for nm, a in zip(names, (sigma_old, eps_old, eps_new)))
+    # Finiteness is checked by the C++ update (std::invalid_argument -> ValueError).
+    arrays = tuple(_mandel(nm, a, model, check_finite=False)
+                   for nm, a in zip(names, (sigma_old, eps_old, eps_new)))
     _same_points(names, arrays)
     return arrays
 

@@ -41,11 +41,13 @@
 #include "viscoplastic_law.hpp"
 #include "yield_sets.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 namespace vpcontact
 {
@@ -80,7 +82,47 @@ struct NewtonOptions
 
 namespace detail
 {
-inline void check_time_step(double dt) { require_positive_finite("dt", dt); }
+/// Index of the first non-finite entry of x[0..count), or count if all are
+/// finite. The scan accumulates x - x (0, or NaN for +-inf and NaN) over
+/// blocks with independent sums, so it runs at memory speed; only a block
+/// with a non-finite entry is searched element by element.
+inline std::size_t first_non_finite(const double* x, std::size_t count) noexcept
+{
+  constexpr std::size_t block = 512;
+  for (std::size_t start = 0; start < count; start += block)
+  {
+    const std::size_t end = std::min(count, start + block);
+    double acc[4] = {0.0, 0.0, 0.0, 0.0};
+    std::size_t i = start;
+    for (; i + 4 <= end; i += 4)
+      for (int j = 0; j < 4; ++j)
+        acc[j] += x[i + j] - x[i + j];
+    for (; i < end; ++i)
+      acc[0] += x[i] - x[i];
+    if (!(acc[0] + acc[1] + acc[2] + acc[3] == 0.0))
+      for (i = start; i < end; ++i)
+        if (!std::isfinite(x[i]))
+          return i;
+  }
+  return count;
+}
+
+/// The checks every stress update starts with: k > 0 finite, and finite
+/// inputs (std::invalid_argument naming the array and the first bad point).
+template <int N>
+inline void check_step(double dt, const StepArrays& step)
+{
+  require_positive_finite("dt", dt);
+  const std::pair<const char*, const double*> inputs[]
+      = {{"sigma_old", step.sigma_old}, {"eps_old", step.eps_old}, {"eps_new", step.eps_new}};
+  for (const auto& [name, x] : inputs)
+  {
+    const std::size_t i = first_non_finite(x, step.num_points * N);
+    if (i < step.num_points * N)
+      throw std::invalid_argument(std::string(name) + ": contains non-finite values (first at point "
+                                  + std::to_string(i / N) + ")");
+  }
+}
 
 [[noreturn]] inline void throw_non_finite_trial(std::size_t p)
 {
@@ -149,7 +191,7 @@ void explicit_update(const Law& law, const Elasticity& elasticity, double dt,
 {
   static_assert(is_viscoplastic_law_v<Law>, "Law must model the ViscoplasticLaw concept");
   constexpr int N = Law::size;
-  detail::check_time_step(dt);
+  detail::check_step<N>(dt, step);
   const detail::Matrix<N> C = elasticity_matrix<N>(elasticity);
   for (std::size_t p = 0; p < step.num_points; ++p)
   {
@@ -272,7 +314,7 @@ void implicit_update_newton(const Law& law, const Elasticity& elasticity, double
 {
   static_assert(is_viscoplastic_law_v<Law>, "Law must model the ViscoplasticLaw concept");
   constexpr int N = Law::size;
-  detail::check_time_step(dt);
+  detail::check_step<N>(dt, step);
   const detail::Matrix<N> C = elasticity_matrix<N>(elasticity);
   for (std::size_t p = 0; p < step.num_points; ++p)
   {
@@ -329,7 +371,7 @@ template <int N>
 void implicit_update(const LinearG<N>& law, const Elasticity& elasticity, double dt,
                      const StepArrays& step)
 {
-  detail::check_time_step(dt);
+  detail::check_step<N>(dt, step);
   const double denominator = 1.0 - dt * law.a;
   if (!(denominator > 0.0))
     throw std::invalid_argument("dt: the implicit step of G = a sigma + b eps needs "
@@ -369,7 +411,7 @@ template <int N>
 void implicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double dt,
                      const StepArrays& step)
 {
-  detail::check_time_step(dt);
+  detail::check_step<N>(dt, step);
   const YieldSet<N>& set = law.set;
   if (elastic_eigenvalues<N>(elasticity) != set.e || eigenbasis<N>(elasticity.model) != set.Q)
   {
