@@ -34,7 +34,7 @@ from mpi4py import MPI
 
 from benchlib import machine, save
 from vpcontact import paper_signorini as paper
-from vpcontact.nonlinear import DEFAULT_OPTIONS
+from vpcontact.nonlinear import DEFAULT_OPTIONS, time_split
 from vpcontact.stepping import StepControl, advance
 
 
@@ -72,10 +72,8 @@ def _run(args, dt: float, options: dict, baselines: dict) -> dict:
     steps = len(reports)
     total_its = problem.solver.total_iterations  # with the iterations of rejected attempts
     t = problem.solver.timings
-    split = {"kernel": t["kernel"] / steps, "residual_assembly": t["residual"] / steps,
-             "jacobian_assembly": t["jacobian"] / steps,
-             "linear_solve_and_vi": (t["snes"] - t["kernel"] - t["residual"] - t["jacobian"]) / steps,
-             "other": (wall - t["snes"]) / steps}
+    split = {k: v / steps for k, v in time_split(t).items()}
+    split["other"] = (wall - t["snes"]) / steps
     step_time = wall / steps
     lagged = problem.solver.lagged_lu
     run = {

@@ -50,6 +50,7 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
     """Run one size in this process; the record of its timed window (``sigma_y``: the paper's
     √10 by default; ``inf`` makes the body elastic)."""
     from vpcontact import paper_signorini as paper
+    from vpcontact.nonlinear import time_split
     from vpcontact.stepping import StepControl, advance
 
     sigma_y = paper.SIGMA_Y if sigma_y is None else sigma_y
@@ -81,10 +82,7 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
     return {"dim": dim, "n": n, "sigma_y": _json_float(sigma_y),
             "mu_star": mu_star, "dofs": dofs, "ranks": comm.size, "steps": steps,
             "seconds_per_step": wall / steps,
-            "seconds_per_step_split": {
-                "kernel": t["kernel"], "residual_assembly": t["residual"],
-                "jacobian_assembly": t["jacobian"],
-                "linear_solve_and_vi": t["snes"] - t["kernel"] - t["residual"] - t["jacobian"]},
+            "seconds_per_step_split": time_split(t),
             "newton_iterations_per_step": (solver.total_iterations - its0) / steps,
             "factorizations_per_step": counters.get("factorizations"),
             "vi_linear_counters_per_step": counters,

@@ -183,6 +183,13 @@ def test_bundled_scene_runs_and_writes_its_outputs(shared_tmp_path, name, cells,
     assert len(summary["converged_reasons"]) == summary["steps"]
     assert all(r.startswith("CONVERGED") for r in summary["converged_reasons"])
     assert "contact_pressure" in (out / f"{name}.xdmf").read_text()
+    # The wall-time split: every part measured, none negative, together within the wall time.
+    split = summary["wall_time_split_s"]
+    assert set(split) == {"kernel", "residual_assembly", "jacobian_assembly", "linear_solve",
+                          "vi_and_other_snes", "output"}
+    assert all(v > 0 for k, v in split.items() if k != "vi_and_other_snes"), split
+    assert split["vi_and_other_snes"] > -1e-3, split  # a difference of two clocks
+    assert sum(split.values()) <= summary["wall_time_s"] * 1.01 + 1e-3, split
     values = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
     assert np.isfinite(values).all() and (values[:, 6] <= 1e-8).all()  # compressive only
 

@@ -70,6 +70,16 @@ def _forget(prefix: str, keys) -> None:
             opts.delValue(prefix + key)
 
 
+
+def time_split(timings: dict) -> dict:
+    """The parts of a solver's :attr:`timings` [s]: kernels, residual and Jacobian assembly,
+    linear solves (KSPSolve), and the rest of the SNES solves (VI/active-set work: reduced
+    matrices and index sets; line searches and vector work)."""
+    rest = timings["snes"] - timings["kernel"] - timings["residual"] - timings["jacobian"]
+    return {"kernel": timings["kernel"], "residual_assembly": timings["residual"],
+            "jacobian_assembly": timings["jacobian"], "linear_solve": timings["linear_solve"],
+            "vi_and_other_snes": rest - timings["linear_solve"]}
+
 class StepSolver:
     """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
 
@@ -156,8 +166,12 @@ class StepSolver:
         self.vi_solves = 0  # SNES VI runs (Signorini steps not settled by plain Newton)
         self.kernel_calls = 0
         #: wall time [s] spent in the refresh hook (kernels), residual and Jacobian assembly,
-        #: and in SNES solves altogether (the rest of which is linear solves and VI work)
-        self.timings = {"kernel": 0.0, "residual": 0.0, "jacobian": 0.0, "snes": 0.0}
+        #: in PETSc's KSPSolve (linear solves, factorizations included) and in SNES solves
+        #: altogether (the rest of which is VI/active-set work, line searches and vector work)
+        self.timings = {"kernel": 0.0, "residual": 0.0, "jacobian": 0.0, "linear_solve": 0.0,
+                        "snes": 0.0}
+        PETSc.Log.begin()  # PETSc's event log, for the time spent in KSPSolve
+        self._ksp_event = PETSc.Log.Event("KSPSolve")
 
     def _setup(self, snes: PETSc.SNES) -> None:
         snes.setFunction(self._residual, self._b)
@@ -354,8 +368,10 @@ class StepSolver:
     def _run(self, snes: PETSc.SNES) -> tuple[int, int]:
         """One SNES solve from self._x: (converged reason, iterations)."""
         start = _time.perf_counter()
+        ksp_start = self._ksp_event.getPerfInfo()["time"]
         snes.solve(None, self._x)
         self.timings["snes"] += _time.perf_counter() - start
+        self.timings["linear_solve"] += self._ksp_event.getPerfInfo()["time"] - ksp_start
         its = snes.getIterationNumber()
         self.total_iterations += its
         return snes.getConvergedReason(), its

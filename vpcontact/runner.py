@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import time as _time
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
@@ -25,6 +26,17 @@ class RunRecord:
     cuts: list = field(default_factory=list)         # stepping.Cut per rejected step
     completed: bool = False                          # reached t_final
     wall_time: float = 0.0
+    output_time: float = 0.0                         # [s] writing XDMF, recording the history
+
+
+@contextmanager
+def _timed(record: RunRecord):
+    """Add the wall time of the block to ``record.output_time``."""
+    start = _time.perf_counter()
+    try:
+        yield
+    finally:
+        record.output_time += _time.perf_counter() - start
 
 
 def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Path] = None,
@@ -54,11 +66,12 @@ pairs) besides u, stress and von Mises norm.
         if comm.rank == 0:
             Path(out).mkdir(parents=True, exist_ok=True)
         comm.barrier()
+    record = RunRecord()
     if out is not None and xdmf:
-        series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells, extra=xdmf_extra)
+        with _timed(record):
+            series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells, extra=xdmf_extra)
     if history is None and problem.contact_dofs is not None:
         history = ContactHistory(problem)
-    record = RunRecord()
     if history is not None:
         history.record(0.0)
     start = _time.perf_counter()
@@ -71,11 +84,12 @@ pairs) besides u, stress and von Mises norm.
             if problem.contact_monitor is not None:
                 report = problem.contact_monitor.report()
                 record.contact.append(report)
-            if history is not None:
-                history.record(step.time)
             last = step.time >= t_final * (1 - 1e-12)
-            if series is not None and (step.step % xdmf_every == 0 or last):
-                series.write(step.time)
+            with _timed(record):
+                if history is not None:
+                    history.record(step.time)
+                if series is not None and (step.step % xdmf_every == 0 or last):
+                    series.write(step.time)
             if progress is not None:
                 progress(step, report)
             if verbose and comm.rank == 0:
@@ -85,12 +99,14 @@ pairs) besides u, stress and von Mises norm.
         record.completed = True
     finally:
         record.cuts = list(control.cuts)
-        if series is not None:
-            series.close()
+        with _timed(record):
+            if series is not None:
+                series.close()
         record.wall_time = _time.perf_counter() - start
         cells.update()
-        if out is not None and history is not None:
-            history.write_csv(Path(out) / csv_name)
+        with _timed(record):
+            if out is not None and history is not None:
+                history.write_csv(Path(out) / csv_name)
     return record, history, cells
 
 
