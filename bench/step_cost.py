@@ -4,12 +4,14 @@ unknown, and the speed-up of 2 MPI ranks.
 
 Targets (issue "[5 of 5]"): the step cost's fitted exponent in the dof count (3-D ≤ 1.15 with an
 iterative solver); peak memory per dof recorded; ``mpirun -n 2`` speed-up on the 3-D test ≥ 1.6.
+Recorded per dimension: the fit over all sizes, the exponents between consecutive sizes and the
+fit over the four largest (when there are more than four).
 
 Each mesh size runs in a fresh process (so its peak resident memory is its own): the paper's
 2-D test (§4.1.1, n×n) in its viscoplastic flow regime, t ∈ [0.4, 0.5] s, and the 3-D test
 (§4.1.2, 3n×n×n) in contact, t ∈ [0.3, 0.4] s, both with k = 0.01 s after an untimed run-in from
 t = 0 with k = 0.02 s. Per step: wall time and its split (kernel, residual assembly, Jacobian
-assembly, linear solves + VI work), Newton iterations, factorizations.
+assembly, linear solves, VI and other SNES work), Newton iterations, factorizations.
 
     .venv/bin/python bench/step_cost.py [--sizes2d 16 32 64 128] [--sizes3d 4 6 8 12 16] [--ranks 2]
         [--mpi-size 8] [--mu-star MU] [--sigma-y SY] [-o KEY=VALUE ...] [--out FILE]
@@ -43,6 +45,7 @@ from benchlib import machine, save
 
 WINDOWS = {2: (0.4, 0.5), 3: (0.3, 0.4)}  # timed interval per dimension [s]
 RUN_IN_STEP, STEP = 0.02, 0.01
+LARGEST_FIT = 4  # sizes in the large-size fit
 
 
 def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
@@ -124,6 +127,21 @@ def exponent(records: list, part: Optional[str] = None) -> float:
     return float(np.polyfit(np.log(dofs), np.log(cost), 1)[0])
 
 
+def local_exponents(records: list) -> list:
+    """Exponents between consecutive sizes (where the growth changes: e.g. when the matrices
+    leave the caches)."""
+    rs = sorted(records, key=lambda r: r["dofs"])
+    return [float(np.log(b["seconds_per_step"] / a["seconds_per_step"])
+                  / np.log(b["dofs"] / a["dofs"])) for a, b in zip(rs, rs[1:])]
+
+
+def largest_fit(records: list, count: int = LARGEST_FIT):
+    """Fitted exponent over the ``count`` largest sizes (the asymptotic regime, where the
+    matrices no longer fit the caches); None with fewer sizes than that."""
+    rs = sorted(records, key=lambda r: r["dofs"])[-count:]
+    return exponent(rs) if len(rs) == count and len(records) > count else None
+
+
 def marginal_memory(records: list):
     """Extra peak memory per extra dof between the two largest sizes (the fixed cost of the
     interpreter and libraries, ~100 MB, dominates the per-dof figure of small meshes)."""
@@ -172,6 +190,8 @@ def main(argv=None) -> int:
                              "split_exponents": ({part: exponent(records, part)
                                                   for part in records[0]["seconds_per_step_split"]}
                                                  if len(records) > 1 else None),
+                             "local_exponents": local_exponents(records),
+                             f"exponent_largest_{LARGEST_FIT}": largest_fit(records),
                              "marginal_memory_bytes_per_dof": marginal_memory(records)}
     if args.ranks > 1:
         serial = launch(3, args.mpi_size, 1, passed_on)
