@@ -80,6 +80,7 @@ def time_split(timings: dict) -> dict:
             "jacobian_assembly": timings["jacobian"], "linear_solve": timings["linear_solve"],
             "vi_and_other_snes": rest - timings["linear_solve"]}
 
+
 class StepSolver:
     """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
 
