@@ -70,7 +70,6 @@ def _forget(prefix: str, keys) -> None:
             opts.delValue(prefix + key)
 
 
-
 def time_split(timings: dict) -> dict:
     """The parts of a solver's :attr:`timings` [s]: kernels, residual and Jacobian assembly,
     linear solves (KSPSolve), and the rest of the SNES solves (VI/active-set work: reduced
