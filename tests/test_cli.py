@@ -21,7 +21,12 @@ from vpcontact.constitutive import LinearRate, Perzyna, PlaneStrain
 
 
 def _write(path: Path, text: str) -> Path:
-    """Write ``text`` on rank 0; every rank returns once the file exists."""
+    """Write ``text`` on rank 0; every rank returns once the file exists.
+
+    The first barrier keeps rank 0 from overwriting a file that another rank is still reading
+    (tests read a scene, change it and write it back under the same name).
+    """
+    MPI.COMM_WORLD.barrier()
     if MPI.COMM_WORLD.rank == 0:
         path.write_text(text)
     MPI.COMM_WORLD.barrier()
