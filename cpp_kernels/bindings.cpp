@@ -12,6 +12,7 @@
 #include <pybind11/stl.h>
 
 #include <cstddef>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -23,6 +24,9 @@ namespace
 {
 using InArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
 using OutArray = py::array_t<double, py::array::c_style>;
+// The tangent output may be None: the kernels then skip it (and, for the implicit updates,
+// the work of computing it).
+using OptionalOut = std::optional<OutArray>;
 
 void check_shape(const py::array& a, const std::vector<py::ssize_t>& shape, const char* name)
 {
@@ -56,7 +60,7 @@ Elasticity elasticity(const std::string& model, double E, double nu)
 }
 
 StepArrays step_arrays(Model model, const InArray& sigma_old, const InArray& eps_old,
-                       const InArray& eps_new, OutArray& sigma_new, OutArray& tangent)
+                       const InArray& eps_new, OutArray& sigma_new, OptionalOut& tangent)
 {
   const py::ssize_t n = mandel_size(model);
   const py::ssize_t N = sigma_old.ndim() == 2 ? sigma_old.shape(0) : -1;
@@ -66,7 +70,7 @@ StepArrays step_arrays(Model model, const InArray& sigma_old, const InArray& eps
   step.eps_old = in(eps_old, {N, n}, "eps_old");
   step.eps_new = in(eps_new, {N, n}, "eps_new");
   step.sigma_new = out(sigma_new, {N, n}, "sigma_new");
-  step.tangent = out(tangent, {N, n, n}, "tangent");
+  step.tangent = tangent ? out(*tangent, {N, n, n}, "tangent") : nullptr;
   return step;
 }
 
@@ -172,7 +176,7 @@ PYBIND11_MODULE(_cpp, m)
       "perzyna_update",
       [](const std::string& scheme, const std::string& model, double E, double nu, double sigma_y,
          double mu_star, double dt, const InArray& sigma_old, const InArray& eps_old,
-         const InArray& eps_new, OutArray& sigma_new, OutArray& tangent)
+         const InArray& eps_new, OutArray& sigma_new, OptionalOut tangent)
       {
         const Scheme sch = parse_scheme(scheme);
         const Elasticity el = elasticity(model, E, nu);
@@ -187,7 +191,7 @@ PYBIND11_MODULE(_cpp, m)
       "perzyna_update_newton",
       [](const std::string& model, double E, double nu, double sigma_y, double mu_star, double dt,
          const InArray& sigma_old, const InArray& eps_old, const InArray& eps_new,
-         OutArray& sigma_new, OutArray& tangent)
+         OutArray& sigma_new, OptionalOut tangent)
       {
         const Elasticity el = elasticity(model, E, nu);
         const StepArrays step
@@ -201,7 +205,7 @@ PYBIND11_MODULE(_cpp, m)
       "linear_update",
       [](const std::string& scheme, const std::string& model, double E, double nu, double a,
          double b, double dt, const InArray& sigma_old, const InArray& eps_old,
-         const InArray& eps_new, OutArray& sigma_new, OutArray& tangent)
+         const InArray& eps_new, OutArray& sigma_new, OptionalOut tangent)
       {
         const Scheme sch = parse_scheme(scheme);
         const Elasticity el = elasticity(model, E, nu);
@@ -216,7 +220,7 @@ PYBIND11_MODULE(_cpp, m)
       "linear_update_newton",
       [](const std::string& model, double E, double nu, double a, double b, double dt,
          const InArray& sigma_old, const InArray& eps_old, const InArray& eps_new,
-         OutArray& sigma_new, OutArray& tangent)
+         OutArray& sigma_new, OptionalOut tangent)
       {
         const Elasticity el = elasticity(model, E, nu);
         const StepArrays step

@@ -619,6 +619,26 @@ def test_mandel_update_writes_preallocated_outputs_in_place(model):
     assert s_lin is out[0]
 
 
+@pytest.mark.parametrize("scheme", ["explicit", "implicit"])
+@pytest.mark.parametrize("model", MODELS)
+def test_update_without_tangent_gives_the_same_stress(model, scheme):
+    rng = np.random.default_rng(41)
+    so, eo, en = (np.ascontiguousarray(K.to_mandel(a)) for a in perzyna_case(rng, model, num=12))
+    kw = dict(dt=1e-6, mu_star=MU_STAR, model=model, scheme=scheme, **PAPER)
+    s_ref, _ = K.stress_update_mandel(so, eo, en, **kw)
+    s, t = K.stress_update_mandel(so, eo, en, tangent=False, **kw)
+    assert t is None and np.array_equal(s, s_ref)
+    lin = dict(dt=0.1, E=1.0, a=-1.0, b=1.0, model=model, scheme=scheme)
+    s_ref, _ = K.stress_update_linear_mandel(so, eo, en, **lin)
+    s, t = K.stress_update_linear_mandel(so, eo, en, tangent=False, **lin)
+    assert t is None and np.array_equal(s, s_ref)
+    n = K.mandel_size(model)
+    with pytest.raises(ValueError, match=r"out\[1\]: a tangent array was given with tangent=False"):
+        K.stress_update_mandel(so, eo, en, tangent=False, out=(None, np.empty((12, n, n))), **kw)
+    with pytest.raises(ValueError, match="tangent: expected True or False"):
+        K.stress_update_mandel(so, eo, en, tangent=1, **kw)
+
+
 # --- validation --------------------------------------------------------------------------
 
 

@@ -84,11 +84,13 @@ class LinearRate:
         return 2.0 / abs(self.a)
 
     def update(self, stress_old, strain_old, strain_new, dt, stress_out, tangent_out) -> None:
-        """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout)."""
+        """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout);
+        ``tangent_out=None`` skips the tangent."""
         el = self.elasticity
         kernels.stress_update_linear_mandel(
             stress_old, strain_old, strain_new, dt=dt, E=el.E, nu=el.nu, a=self.a, b=self.b,
-            model=el.model, scheme=self.scheme, out=(stress_out, tangent_out))
+            model=el.model, scheme=self.scheme, out=(stress_out, tangent_out),
+            tangent=tangent_out is not None)
 
 
 def Elastic(elasticity: Elasticity) -> LinearRate:
@@ -127,11 +129,13 @@ class Perzyna:
         return 2.0 * self.mu_star / float(np.linalg.eigvalsh(self.elasticity.matrix()).max())
 
     def update(self, stress_old, strain_old, strain_new, dt, stress_out, tangent_out) -> None:
-        """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout)."""
+        """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout);
+        ``tangent_out=None`` skips the tangent."""
         el = self.elasticity
         kernels.stress_update_mandel(
             stress_old, strain_old, strain_new, dt=dt, E=el.E, nu=el.nu, sigma_y=self.sigma_y,
-            mu_star=self.mu_star, model=el.model, scheme=self.scheme, out=(stress_out, tangent_out))
+            mu_star=self.mu_star, model=el.model, scheme=self.scheme, out=(stress_out, tangent_out),
+            tangent=tangent_out is not None)
 
 
 class PlaneStrain:
@@ -175,10 +179,12 @@ class PlaneStrain:
         s_old, e_old, e_new = np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, 6))
         s_old[:, ip], s_old[:, 2] = stress_old, self._s33_old
         e_old[:, ip], e_new[:, ip] = strain_old, strain_new
-        s_new, t_new = np.empty((n, 6)), np.empty((n, 6, 6))
+        s_new = np.empty((n, 6))
+        t_new = None if tangent_out is None else np.empty((n, 6, 6))
         self.law.update(s_old, e_old, e_new, dt, s_new, t_new)
         stress_out[:] = s_new[:, ip]
-        tangent_out[:] = t_new[:, ip][:, :, ip]
+        if tangent_out is not None:
+            tangent_out[:] = t_new[:, ip][:, :, ip]
         self._s33[:] = s_new[:, 2]
 
     def commit(self) -> None:

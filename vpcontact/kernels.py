@@ -189,14 +189,18 @@ def _output(name: str, out: object, shape: Tuple[int, ...]) -> np.ndarray:
     return out
 
 
-def _outputs(out, num_points: int, n: int) -> Tuple[np.ndarray, np.ndarray]:
+def _outputs(out, num_points: int, n: int, tangent: bool) -> Tuple[np.ndarray, Optional[np.ndarray]]:
     if out is None:
         out = (None, None)
     if not isinstance(out, (tuple, list)) or len(out) != 2:
         raise ValueError("out: expected a pair (sigma_new, tangent) of arrays or None")
+    if not isinstance(tangent, bool):
+        raise ValueError(f"tangent: expected True or False, got {tangent!r}")
+    if not tangent and out[1] is not None:
+        raise ValueError("out[1]: a tangent array was given with tangent=False")
     return (
         _output("out[0]", out[0], (num_points, n)),
-        _output("out[1]", out[1], (num_points, n, n)),
+        _output("out[1]", out[1], (num_points, n, n)) if tangent else None,
     )
 
 
@@ -425,7 +429,8 @@ def stress_update_mandel(
     model: str,
     scheme: str = "implicit",
     out: Optional[Tuple[np.ndarray, np.ndarray]] = None,
-) -> Tuple[np.ndarray, np.ndarray]:
+    tangent: bool = True,
+) -> Tuple[np.ndarray, Optional[np.ndarray]]:
     """One Perzyna time step on Mandel arrays (the FE solver's hot loop).
 
     See :func:`stress_update` for the mathematics.
@@ -442,11 +447,15 @@ def stress_update_mandel(
         model: One of :data:`MODELS`.
         scheme: ``"implicit"`` (default) or ``"explicit"``.
         out: Optional pair of preallocated float64 C-contiguous arrays of shapes
-            ``(N, n)`` and ``(N, n, n)``, written in place (they may alias the inputs).
+            ``(N, n)`` and ``(N, n, n)``, written in place (they may alias the inputs);
+            with ``tangent=False`` the second must be None.
+        tangent: False skips the tangent: it is neither computed nor written, and None is
+            returned in its place (for callers whose tangent is constant and already known,
+            e.g. the explicit scheme's E).
 
     Returns:
         ``(sigma_new, tangent)``: :math:`\\sigma_n`, shape ``(N, n)``, and the Mandel
-        matrix of :math:`d\\sigma_n/d\\varepsilon_n`, shape ``(N, n, n)``.
+        matrix of :math:`d\\sigma_n/d\\varepsilon_n`, shape ``(N, n, n)`` (or None).
     """
     model = _check_model(model)
     scheme = _check_scheme(scheme)
@@ -455,7 +464,7 @@ def stress_update_mandel(
     sy = _yield_stress(sigma_y)
     mu = _positive("mu_star", mu_star)
     so, eo, en = _step_inputs(model, sigma_old, eps_old, eps_new)
-    s_out, t_out = _outputs(out, so.shape[0], mandel_size(model))
+    s_out, t_out = _outputs(out, so.shape[0], mandel_size(model), tangent)
     _cpp.perzyna_update(scheme, model, young, poisson, sy, mu, k, so, eo, en, s_out, t_out)
     return s_out, t_out
 
@@ -473,7 +482,8 @@ def stress_update_linear_mandel(
     model: str,
     scheme: str = "explicit",
     out: Optional[Tuple[np.ndarray, np.ndarray]] = None,
-) -> Tuple[np.ndarray, np.ndarray]:
+    tangent: bool = True,
+) -> Tuple[np.ndarray, Optional[np.ndarray]]:
     """One time step with :math:`G = a\\sigma + b\\varepsilon` on Mandel arrays.
 
     See :func:`stress_update_linear` for the mathematics; arguments as in
@@ -481,7 +491,8 @@ def stress_update_linear_mandel(
     ``mu_star``.
 
     Returns:
-        ``(sigma_new, tangent)`` with shapes ``(N, n)`` and ``(N, n, n)``.
+        ``(sigma_new, tangent)`` with shapes ``(N, n)`` and ``(N, n, n)`` (tangent None with
+        ``tangent=False``).
     """
     model = _check_model(model)
     scheme = _check_scheme(scheme)
@@ -493,7 +504,7 @@ def stress_update_linear_mandel(
             f"dt: the implicit step of G = a sigma + b eps needs 1 - dt*a > 0, got dt*a = {k * ca}"
         )
     so, eo, en = _step_inputs(model, sigma_old, eps_old, eps_new)
-    s_out, t_out = _outputs(out, so.shape[0], mandel_size(model))
+    s_out, t_out = _outputs(out, so.shape[0], mandel_size(model), tangent)
     _cpp.linear_update(scheme, model, young, poisson, ca, cb, k, so, eo, en, s_out, t_out)
     return s_out, t_out
 

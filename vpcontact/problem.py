@@ -108,6 +108,7 @@ class QuasistaticProblem:
         self.u = fem.Function(self.V, name="displacement")
         self.time = fem.Constant(mesh, 0.0)
         self.dt = 0.0
+        self._tangent_key = None  # the step whose tangent the state holds (affine laws only)
 
         clamped = facet_tags.find(clamped_tag)
         n_clamped = mesh.comm.allreduce(len(clamped), op=MPI.SUM)
@@ -190,15 +191,24 @@ class QuasistaticProblem:
             raise InputError(f"initial stress must have {self.state.size} Mandel components")
         self.state.set_stress(values)
 
+    def _tangent_out(self, key) -> Optional[np.ndarray]:
+        """Where the update writes the tangent, or None to skip it: a law affine in ε_n has a
+        tangent that depends only on the step (``key``), so it is written once per step."""
+        if self.law.linear_in_strain and key == self._tangent_key:
+            return None
+        self._tangent_key = key if self.law.linear_in_strain else None
+        return self.state.tangent_view()
+
     def _update_stress(self) -> None:
         st = self.state
         eps = st.strain_at_points()
         if self._bdf2 is not None and self._bdf2.active:
             sigma_hist, zero, dt = self._bdf2.inputs()
-            self.law.update(sigma_hist, zero, eps, dt, st.view(st.stress), st.tangent_view())
+            self.law.update(sigma_hist, zero, eps, dt, st.view(st.stress),
+                            self._tangent_out(("bdf2", dt)))
             return
         self.law.update(st.view(st.stress_old), st.view(st.strain_old), eps, self.dt,
-                        st.view(st.stress), st.tangent_view())
+                        st.view(st.stress), self._tangent_out(("euler", self.dt)))
 
     def step(self, dt: float, tolerance: Optional[float] = None) -> StepReport:
         """Advance from t_{n-1} to t_n = t_{n-1} + dt; on failure the state is rolled back.
