@@ -202,6 +202,36 @@ def test_projection_lands_on_boundary_and_is_idempotent(model):
     np.testing.assert_allclose(pp, p, rtol=0, atol=1e-14 * np.abs(p).max())
 
 
+@pytest.mark.parametrize("sigma_y", [1e-150, 1e-140, math.sqrt(10.0), 1e150, 1e300])
+@pytest.mark.parametrize("model", MODELS)
+def test_projection_across_the_fast_inside_test(model, sigma_y):
+    """Points of K are first tested without the scaled split (tau . Y tau <= (1 - 16 eps)
+    sigma_Y^2 when sigma_Y^2 is a normal number); points in the layer around that bound and
+    around the boundary, at any magnitude of sigma_Y, still come back unchanged when inside,
+    land on the boundary when outside, and project to themselves afterwards (bit for bit)."""
+    rng = np.random.default_rng(7)
+    data = dict(E=PAPER["E"], nu=PAPER["nu"], sigma_y=sigma_y)
+    direction = K.to_mandel(random_symmetric(rng, 400, K.dimension(model)))
+    unit = direction / np.sqrt(K.yield_function(K.from_mandel(direction, K.dimension(model)),
+                                                model=model))[:, None]
+    ulps = rng.integers(-80, 80, size=400)  # yield value within ~80 eps of sigma_Y^2
+    m = np.ascontiguousarray(unit * sigma_y * (1.0 + ulps * EPS / 2)[:, None])
+    scale = 2.0 ** math.frexp(sigma_y)[1]  # exact rescaling: sigma_Y^2 may overflow
+
+    def yield_ratio(x):
+        return K.yield_function(K.from_mandel(x / scale, K.dimension(model)),
+                                model=model) / (sigma_y / scale) ** 2
+
+    f = yield_ratio(m)
+    p = K.project_mandel(m, model=model, **data)
+    inside_k = f <= 1.0 - 4 * EPS * K.mandel_size(model)  # inside whatever the evaluation order
+    assert inside_k.sum() > 50 and (~inside_k).sum() > 50
+    assert np.array_equal(p[inside_k], m[inside_k])
+    fp = yield_ratio(p)
+    assert np.all(fp <= 1.0 + 1e-14) and np.all(fp >= 1.0 - 1e-13)
+    assert np.array_equal(K.project_mandel(p, model=model, **data), p)
+
+
 @pytest.mark.parametrize("model", MODELS)
 def test_projection_variational_inequality(model):
     """(E(sigma - P sigma), tau - P sigma) <= 0 for every tau in K."""

@@ -215,6 +215,56 @@ void explicit_update(const Law& law, const Elasticity& elasticity, double dt,
   }
 }
 
+/// Explicit step for Perzyna's law: as the generic one, with E applied by
+/// eigenspace classes (O(n)) when the rate equation's elasticity is the yield
+/// set's, and no flow at points of K (the common, elastic case).
+template <int N>
+void explicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double dt,
+                     const StepArrays& step)
+{
+  const YieldSet<N>& set = law.set;
+  if (elastic_eigenvalues<N>(elasticity) != set.e || eigenbasis<N>(elasticity.model) != set.Q)
+  {
+    explicit_update<Perzyna<N>>(law, elasticity, dt, step);
+    return;
+  }
+  detail::check_step<N>(dt, step);
+  const detail::Matrix<N> C = elasticity_matrix<N>(elasticity);
+  for (std::size_t p = 0; p < step.num_points; ++p)
+  {
+    const detail::Vector<N> so = detail::load<N>(step.sigma_old + p * N);
+    const detail::Vector<N> eo = detail::load<N>(step.eps_old + p * N);
+    const detail::Vector<N> en = detail::load<N>(step.eps_new + p * N);
+    detail::Vector<N> de;
+    for (int a = 0; a < N; ++a)
+      de[a] = en[a] - eo[a];
+    detail::Vector<N> s = set.apply(set.class_e, de);
+    double not_finite = 0.0;
+    for (int a = 0; a < N; ++a)
+    {
+      s[a] += so[a];
+      not_finite += s[a] - s[a]; // 0, or NaN if s[a] is +-inf or NaN
+    }
+    if (!(not_finite == 0.0))
+      detail::throw_non_finite_trial(p);
+    if (!set.clearly_inside(so))
+    {
+      detail::Vector<N> g;
+      law.G(so.data(), eo.data(), g.data());
+      for (int a = 0; a < N; ++a)
+      {
+        s[a] += dt * g[a];
+        not_finite += s[a] - s[a];
+      }
+      if (!(not_finite == 0.0))
+        throw std::domain_error("explicit_update: sigma_new is not finite at point "
+                                + std::to_string(p) + " (dt G(sigma_old, eps_old) overflows)");
+    }
+    detail::store(s, step.sigma_new + p * N);
+    detail::store_if(C, step.tangent, p * N * N);
+  }
+}
+
 namespace detail
 {
 /// Solve R(sigma) = sigma - sigma^tr - kappa G(sigma, eps_n) = 0 by Newton's
@@ -441,6 +491,12 @@ void implicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
     detail::Vector<N> tr = set.apply(set.class_e, de);
     for (int a = 0; a < N; ++a)
       tr[a] += step.sigma_old[p * N + a];
+    if (set.clearly_inside(tr)) // elastic: the common case, without the scaled split
+    {
+      detail::store(tr, step.sigma_new + p * N);
+      detail::store_if(C, step.tangent, p * N * N);
+      continue;
+    }
     detail::Split<N> split;
     detail::split<N>(set, tr, split);
     if (!std::isfinite(split.yield_value)) // bounded unless tr has an inf or NaN

@@ -135,6 +135,10 @@ struct YieldSet
   std::array<double, num_classes> class_e;
   /// Eigenvalue of Y on each class.
   std::array<double, num_classes> class_y;
+  /// (1 - 16 eps) sigma_Y^2, or -1 when sigma_Y^2 overflows or comes near the
+  /// subnormal range: stresses with tau . Y tau <= inside_bound, evaluated
+  /// without scaling (see clearly_inside), are in K whatever the rounding.
+  double inside_bound = -1.0;
 
   /// @param elasticity Elastic constants (validated here).
   /// @param yield_stress sigma_Y, > 0; +infinity allowed (never yields).
@@ -151,6 +155,10 @@ struct YieldSet
       class_e[g] = e[g];
       class_y[g] = y[g];
     }
+    const double bound
+        = (1.0 - 16.0 * std::numeric_limits<double>::epsilon()) * yield_stress * yield_stress;
+    if (std::isfinite(bound) && bound >= 1e-290)
+      inside_bound = bound;
     for (int i = 1; i < N; ++i)
       if (e[i] != e[1] || y[i] != y[1])
         throw std::logic_error("YieldSet: eigenvalues 1..n-1 of E and Y must coincide");
@@ -164,6 +172,16 @@ struct YieldSet
   double value(const double* tau) const noexcept
   {
     return class_value(y[0], N == 1 ? 0.0 : y[N - 1], detail::load<N>(tau));
+  }
+
+  /// Cheap sufficient test for x in K: tau . Y tau at most (1 - 16 eps) sigma_Y^2,
+  /// evaluated without the power-of-two scaling of the full projection (the
+  /// bound keeps clear of overflow and of the subnormal range, so a false
+  /// answer only sends x to the full test). NaN gives false.
+  /// @param x Mandel vector.
+  bool clearly_inside(const detail::Vector<N>& x) const noexcept
+  {
+    return class_value(y[0], N == 1 ? 0.0 : y[N - 1], x) <= inside_bound;
   }
 
   /// y_0 |P_0 x|^2 + y_1 |P_1 x|^2 with the mean split off exactly, so that a
@@ -496,6 +514,11 @@ template <int N>
 int project(const YieldSet<N>& set, const double* sigma, double* tau) noexcept
 {
   const detail::Vector<N> x = detail::load<N>(sigma);
+  if (set.clearly_inside(x))
+  {
+    detail::store(x, tau);
+    return 0;
+  }
   detail::Split<N> split;
   detail::split<N>(set, x, split);
   const detail::Multiplier<N> m
