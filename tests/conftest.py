@@ -26,7 +26,8 @@ def pytest_runtest_logreport(report):
     comm = MPI.COMM_WORLD
     if comm.size == 1 or not report.failed:
         return
-    sys.stderr.write(f"\n[rank {comm.rank} of {comm.size}] {report.nodeid} failed ({report.when}):\n"
-                     f"{report.longreprtext}\n[rank {comm.rank}] aborting the MPI job\n")
+    sys.stderr.write(f"\n[rank {comm.rank} of {comm.size}] {report.nodeid} failed "
+                     f"({report.when}):\n{report.longreprtext}\n"
+                     f"[rank {comm.rank}] aborting the MPI job\n")
     sys.stderr.flush()
     comm.Abort(1)

@@ -189,7 +189,8 @@ def _output(name: str, out: object, shape: Tuple[int, ...]) -> np.ndarray:
     return out
 
 
-def _outputs(out, num_points: int, n: int, tangent: bool) -> Tuple[np.ndarray, Optional[np.ndarray]]:
+def _outputs(out, num_points: int, n: int,
+             tangent: bool) -> Tuple[np.ndarray, Optional[np.ndarray]]:
     if out is None:
         out = (None, None)
     if not isinstance(out, (tuple, list)) or len(out) != 2:
