@@ -397,6 +397,30 @@ def perzyna_case(rng, model, num=30, factor=(1.5, 5.0)):
     return sigma_old, eps_old, eps_new
 
 
+@pytest.mark.parametrize("scheme", ["explicit", "implicit"])
+@pytest.mark.parametrize("model", MODELS)
+def test_update_of_many_points_is_the_update_of_each(model, scheme):
+    """The updates pick a branch per point with hints from the previous point (the implicit one
+    skips the cheap inside test after a plastic point): runs of elastic, plastic and boundary
+    points in any order give bit for bit the results of updating each point alone."""
+    rng = np.random.default_rng(42)
+    n, d = K.mandel_size(model), K.dimension(model)
+    sy = PAPER["sigma_y"]
+    sigma_old = K.to_mandel(np.concatenate([inside(rng, 40, model, sy),
+                                            outside(rng, 40, model, sy, (1.0, 1.0 + 1e-15)),
+                                            outside(rng, 40, model, sy)]))
+    order = np.concatenate([np.arange(30), 30 + rng.permutation(90)])  # runs, then a mix
+    so = np.ascontiguousarray(sigma_old[order])
+    eo, en = np.zeros_like(so), np.zeros_like(so)  # trial stress = sigma_old: the branch is set
+    en[::7] = K.to_mandel(random_symmetric(rng, len(en[::7]), d, 1e-8))
+    kw = dict(dt=1e-4, mu_star=MU_STAR, model=model, scheme=scheme, **PAPER)
+    s, t = K.stress_update_mandel(so, eo, en, **kw)
+    for i in range(len(so)):
+        si, ti = K.stress_update_mandel(so[i:i + 1], eo[i:i + 1], en[i:i + 1], **kw)
+        assert np.array_equal(si[0], s[i]) and np.array_equal(ti[0], t[i]), i
+    assert s.shape == (120, n)
+
+
 @pytest.mark.parametrize("model", MODELS)
 def test_explicit_perzyna_matches_closed_form(model):
     rng = np.random.default_rng(20)

@@ -485,6 +485,7 @@ void implicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
     r[g] = set.class_y[g] / set.class_e[g];
     r_over_beta[g] = r[g] / beta;
   }
+  bool try_inside = true;
   for (std::size_t p = 0; p < step.num_points; ++p)
   {
     // sigma^tr = sigma_{n-1} + E (eps_n - eps_{n-1}), with E applied by classes.
@@ -496,7 +497,10 @@ void implicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
     detail::Vector<N> tr = set.apply(set.class_e, de);
     for (int a = 0; a < N; ++a)
       tr[a] += step.sigma_old[p * N + a];
-    if (set.clearly_inside(tr)) // elastic: the common case, without the scaled split
+    // Elastic points (the common case) skip the scaled split after the cheap inside test; the
+    // test is left out after a plastic point, since neighbouring points tend to share their
+    // branch (the full path below gives elastic points the same result, bit for bit).
+    if (try_inside && set.clearly_inside(tr))
     {
       detail::store(tr, step.sigma_new + p * N);
       detail::store_if(C, step.tangent, p * N * N);
@@ -507,6 +511,7 @@ void implicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
     if (!std::isfinite(split.yield_value)) // bounded unless tr has an inf or NaN
       detail::throw_non_finite_trial(p);
     const detail::Multiplier<N> m = detail::solve_multiplier<N>(set, weights, split);
+    try_inside = !m.active;
     if (!m.active)
     {
       detail::store(tr, step.sigma_new + p * N);
