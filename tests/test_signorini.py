@@ -1,12 +1,15 @@
 # SPDX-License-Identifier: MIT
 """Signorini contact through SNES VI: invariants at every step, gaps, bad boundary input."""
 
+import time
+
 import numpy as np
 import pytest
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from vpcontact import paper_signorini as paper
+from vpcontact import runner
 from vpcontact.errors import InputError
 from vpcontact.obstacle import gap_along_normal
 from vpcontact.problem import tag_facets
@@ -67,3 +70,21 @@ def test_elastic_limit_needs_one_newton_step_once_contact_settles():
     its = [problem.step(0.25).newton_iterations for _ in range(4)]
     assert max(its[1:]) <= 2, its
     assert np.isfinite(problem.u.x.array).all()
+
+
+def test_run_wall_time_covers_its_outputs(shared_tmp_path, monkeypatch):
+    # output_time counts creating and closing the XDMF series and writing the contact CSV;
+    # wall_time is the whole run, so it cannot be smaller (a slow CSV write makes the output
+    # time longer than the steps themselves)
+    write_csv = runner.ContactHistory.write_csv
+
+    def slow_write_csv(self, path):
+        time.sleep(1.0)
+        write_csv(self, path)
+
+    monkeypatch.setattr(runner.ContactHistory, "write_csv", slow_write_csv)
+    record, history, _ = runner.run(paper.signorini_2d(4), 0.04, 0.02, out=shared_tmp_path,
+                                    verbose=False)
+    assert record.completed and history is not None
+    assert (shared_tmp_path / "contact_history.csv").exists()
+    assert 1.0 <= record.output_time <= record.wall_time
