@@ -158,6 +158,31 @@ inline Vector<N> trial_stress(const Matrix<N>& C, const StepArrays& step, std::s
   return tr;
 }
 
+/// Whether the rate equation's elasticity is the one of the yield set (then E
+/// can be applied by eigenspace classes).
+template <int N>
+inline bool same_elasticity(const YieldSet<N>& set, const Elasticity& elasticity)
+{
+  return elastic_eigenvalues<N>(elasticity) == set.e && eigenbasis<N>(elasticity.model) == set.Q;
+}
+
+/// sigma^tr = sigma_old + E (eps_new - eps_old) at point p, with E applied by
+/// the eigenspace classes of the yield set (O(n)); not checked finite.
+template <int N>
+inline Vector<N> trial_stress_by_classes(const YieldSet<N>& set, const StepArrays& step,
+                                         std::size_t p) noexcept
+{
+  const Vector<N> eo = load<N>(step.eps_old + p * N);
+  const Vector<N> en = load<N>(step.eps_new + p * N);
+  Vector<N> de;
+  for (int a = 0; a < N; ++a)
+    de[a] = en[a] - eo[a];
+  Vector<N> tr = set.apply(set.class_e, de);
+  for (int a = 0; a < N; ++a)
+    tr[a] += step.sigma_old[p * N + a];
+  return tr;
+}
+
 /// T = coefficient U V^T + sum_g me_g P_g, written to T (n x n, row-major).
 template <int N>
 inline void rank_one_plus_classes(double coefficient, const Vector<N>& U, const Vector<N>& V,
@@ -228,7 +253,7 @@ void explicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
                      const StepArrays& step)
 {
   const YieldSet<N>& set = law.set;
-  if (elastic_eigenvalues<N>(elasticity) != set.e || eigenbasis<N>(elasticity.model) != set.Q)
+  if (!detail::same_elasticity<N>(set, elasticity))
   {
     explicit_update<Perzyna<N>>(law, elasticity, dt, step);
     return;
@@ -237,25 +262,17 @@ void explicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
   const detail::Matrix<N> C = elasticity_matrix<N>(elasticity);
   for (std::size_t p = 0; p < step.num_points; ++p)
   {
-    const detail::Vector<N> so = detail::load<N>(step.sigma_old + p * N);
-    const detail::Vector<N> eo = detail::load<N>(step.eps_old + p * N);
-    const detail::Vector<N> en = detail::load<N>(step.eps_new + p * N);
-    detail::Vector<N> de;
-    for (int a = 0; a < N; ++a)
-      de[a] = en[a] - eo[a];
-    detail::Vector<N> s = set.apply(set.class_e, de);
+    detail::Vector<N> s = detail::trial_stress_by_classes<N>(set, step, p);
     double not_finite = 0.0;
     for (int a = 0; a < N; ++a)
-    {
-      s[a] += so[a];
       not_finite += s[a] - s[a]; // 0, or NaN if s[a] is +-inf or NaN
-    }
     if (!(not_finite == 0.0))
       detail::throw_non_finite_trial(p);
+    const detail::Vector<N> so = detail::load<N>(step.sigma_old + p * N);
     if (!set.clearly_inside(so))
     {
       detail::Vector<N> g;
-      law.G(so.data(), eo.data(), g.data());
+      law.G(so.data(), step.eps_old + p * N, g.data());
       for (int a = 0; a < N; ++a)
       {
         s[a] += dt * g[a];
@@ -468,7 +485,7 @@ void implicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
 {
   detail::check_step<N>(dt, step);
   const YieldSet<N>& set = law.set;
-  if (elastic_eigenvalues<N>(elasticity) != set.e || eigenbasis<N>(elasticity.model) != set.Q)
+  if (!detail::same_elasticity<N>(set, elasticity))
   {
     implicit_update_newton(law, elasticity, dt, step);
     return;
@@ -488,15 +505,7 @@ void implicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
   bool try_inside = true;
   for (std::size_t p = 0; p < step.num_points; ++p)
   {
-    // sigma^tr = sigma_{n-1} + E (eps_n - eps_{n-1}), with E applied by classes.
-    const detail::Vector<N> eo = detail::load<N>(step.eps_old + p * N);
-    const detail::Vector<N> en = detail::load<N>(step.eps_new + p * N);
-    detail::Vector<N> de;
-    for (int a = 0; a < N; ++a)
-      de[a] = en[a] - eo[a];
-    detail::Vector<N> tr = set.apply(set.class_e, de);
-    for (int a = 0; a < N; ++a)
-      tr[a] += step.sigma_old[p * N + a];
+    const detail::Vector<N> tr = detail::trial_stress_by_classes<N>(set, step, p);
     // Elastic points (the common case) skip the scaled split after the cheap inside test; the
     // test is left out after a plastic point, since neighbouring points tend to share their
     // branch (the full path below gives elastic points the same result, bit for bit).
