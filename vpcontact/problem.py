@@ -193,7 +193,7 @@ class QuasistaticProblem:
 
     def _tangent_out(self, key) -> Optional[np.ndarray]:
         """Where the update writes the tangent, or None to skip it: a law affine in ε_n has a
-        tangent that depends only on the step (``key``), so it is written once per step."""
+        tangent that depends only on the step size (``key``), so it is written once per size."""
         if self.law.linear_in_strain and key == self._tangent_key:
             return None
         self._tangent_key = key if self.law.linear_in_strain else None
