@@ -85,10 +85,16 @@ def test_lagged_multigrid_iterations_do_not_grow_with_the_mesh():
     """GMRES iterations per reduced solve grow little under refinement (975 → 6 075 dofs), also
     after the hierarchy has been rebuilt for a plastic tangent: measured 34 → 40 (46 on two
     ranks). With GAMG's default reuse of its first prolongation (and of the first tangent's
-    smoother eigenvalue estimates) the fine mesh needed 70."""
+    smoother eigenvalue estimates) the fine mesh needed 70.
+
+    Serial runs repeat exactly (33.5 → 39.75 now). On two ranks the counts change from run to
+    run (not traced; presumably the order of parallel sums, amplified by the rebuild threshold):
+    seven runs gave 30.9–35.1 → 41.9–48.2, ratios 1.26–1.56. So the ratio bound is wider there;
+    the absolute bound, which the default-reuse failure breaks, is the same."""
     coarse = _multigrid_run(4)[1]
     fine = _multigrid_run(8)[1]
-    assert fine <= 1.5 * coarse and fine <= 55, (coarse, fine)
+    growth = 1.5 if MPI.COMM_WORLD.size == 1 else 1.75
+    assert fine <= growth * coarse and fine <= 55, (coarse, fine)
 
 
 def test_inner_multigrid_options_reach_the_level_smoothers():
