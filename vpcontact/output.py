@@ -146,14 +146,16 @@ class ContactHistory:
             self.pressure.append(p)
 
     def write_csv(self, path: str | Path) -> None:
-        """Long format: t, x, y, z, u_normal, gap, pressure (rank 0 only)."""
-        if self.comm.rank != 0:
-            return
-        with open(path, "w") as f:
-            f.write("t,x,y,z,u_normal,gap,pressure\n")
-            for t, un, p in zip(self.times, self.normal_displacement, self.pressure):
-                for (x, y, z), u_i, g_i, p_i in zip(self.points, un, self.gap, p):
-                    f.write(f"{t:.10g},{x:.10g},{y:.10g},{z:.10g},{u_i:.10e},{g_i:.10e},{p_i:.10e}\n")
+        """Long format: t, x, y, z, u_normal, gap, pressure, written by rank 0; the file is on
+        disk when any rank returns."""
+        if self.comm.rank == 0:
+            with open(path, "w") as f:
+                f.write("t,x,y,z,u_normal,gap,pressure\n")
+                for t, un, p in zip(self.times, self.normal_displacement, self.pressure):
+                    for (x, y, z), u_i, g_i, p_i in zip(self.points, un, self.gap, p):
+                        f.write(f"{t:.10g},{x:.10g},{y:.10g},{z:.10g},"
+                                f"{u_i:.10e},{g_i:.10e},{p_i:.10e}\n")
+        self.comm.barrier()
 
 
 def _gather(comm, array: np.ndarray) -> np.ndarray:
