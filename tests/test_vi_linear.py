@@ -89,7 +89,7 @@ def test_lagged_multigrid_iterations_do_not_grow_with_the_mesh():
 
     Two-rank runs used to vary from run to run (PT-Scotch's threads changed the partition;
     seven runs gave ratios 1.26–1.56 and one broke the bound); with one Scotch thread, the
-    package default, they repeat: 35.6 → 43.1 on two ranks, 33.5 → 39.75 serially."""
+    package default, five runs all gave 35.6 → 43.1 on two ranks (33.5 → 39.75 serially)."""
     coarse = _multigrid_run(4)[1]
     fine = _multigrid_run(8)[1]
     assert fine <= 1.5 * coarse and fine <= 55, (coarse, fine)
