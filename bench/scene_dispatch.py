@@ -34,8 +34,8 @@ from mpi4py import MPI
 
 from benchlib import machine, save
 from vpcontact import scene as scenes
-from vpcontact.build import build
-from vpcontact.nonlinear import DEFAULT_OPTIONS
+from vpcontact.scene import build
+from vpcontact.solver import DEFAULT_OPTIONS
 
 
 def scene_text(cells, steps: int, obstacle: bool) -> str:

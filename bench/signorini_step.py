@@ -8,7 +8,7 @@ on, MUMPS Cholesky (the elastic matrix is SPD; the strictest), and dolfinx's def
 Each step size of --dt runs the whole interval; iterations of rejected (cut) attempts count.
 Records the per-step split: kernel (strain evaluation + C++ stress update), residual assembly,
 Jacobian assembly, and the rest of the SNES solve (linear solves and VI active-set work), and the
-factorizations per step of the VI's lagged direct solver (vpcontact.vi_linear).
+factorizations per step of the VI's lagged direct solver (vpcontact.solver.vi_linear).
 
     .venv/bin/python bench/signorini_step.py [--n 8] [--dt 0.05 0.02 0.01] [--t-final 1.0] [-o key=value ...]
 
@@ -33,9 +33,9 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
 from benchlib import machine, save
-from vpcontact import paper_signorini as paper
-from vpcontact.nonlinear import DEFAULT_OPTIONS, time_split
-from vpcontact.stepping import StepControl, advance
+from vpcontact.paper import signorini as paper
+from vpcontact.solver import DEFAULT_OPTIONS, time_split
+from vpcontact.solver import StepControl, advance
 
 
 def elastic_solve_time(V, options: dict, repeats: int = 3) -> float:

@@ -52,9 +52,9 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
            mu_star: Optional[float] = None) -> dict:
     """Run one size in this process; the record of its timed window (``sigma_y``: the paper's
     √10 by default; ``inf`` makes the body elastic)."""
-    from vpcontact import paper_signorini as paper
-    from vpcontact.nonlinear import time_split
-    from vpcontact.stepping import StepControl, advance
+    from vpcontact.paper import signorini as paper
+    from vpcontact.solver import time_split
+    from vpcontact.solver import StepControl, advance
 
     sigma_y = paper.SIGMA_Y if sigma_y is None else sigma_y
     mu_star = paper.MU_STAR if mu_star is None else mu_star

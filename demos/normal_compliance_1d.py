@@ -38,7 +38,7 @@ With the ``CI`` environment variable set, the refinement study stops at r = 0.02
 
 ## Extending it
 Change the exponent α of the compliance law (α < 1 needs the regularised Jacobian of a later
-release), replace G by a Perzyna law from :mod:`vpcontact.constitutive`, or use the implicit scheme
+release), replace G by a Perzyna law from :mod:`vpcontact.model.constitutive`, or use the implicit scheme
 (``--scheme implicit``) and compare the error constants.
 """
 
@@ -53,7 +53,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-from vpcontact import bar1d
+from vpcontact.paper import bar1d
 
 PAPER_CONSTANT = 0.9557e-1
 SNAPSHOT_TIMES = (0.5, 1.0, 2.0, 4.0, 8.0)

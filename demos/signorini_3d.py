@@ -40,8 +40,8 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-from vpcontact import paper_signorini as paper
-from vpcontact import plots, runner
+from vpcontact.paper import signorini as paper
+from vpcontact.output import plots, runner
 
 
 def run(out: str | Path = "output/signorini_3d", n: int | None = None, dt: float | None = None,

@@ -48,9 +48,13 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 
 # (Re)build the extension module when it is missing or any C++/build file is newer than the stamp.
+# The editable install maps each Python module to its file when it is installed, so it is also
+# redone when the package's set of modules changes (the stamp holds a hash of their paths).
 STAMP="$VENV/.vpcontact-build-stamp"
+modules="$(cd "$ROOT" && find vpcontact -name '*.py' | LC_ALL=C sort | sha256sum | cut -d' ' -f1)"
 rebuild=0
 [ -f "$STAMP" ] || rebuild=1
+[ $rebuild -eq 1 ] || [ "$(cat "$STAMP")" = "$modules" ] || rebuild=1
 if [ $rebuild -eq 0 ] && [ -n "$(find "$ROOT/cpp_kernels" "$ROOT/CMakeLists.txt" "$ROOT/pyproject.toml" -newer "$STAMP" -print -quit)" ]; then
   rebuild=1
 fi
@@ -58,7 +62,7 @@ if [ $rebuild -eq 0 ] && ! "$VENV/bin/python" -c "import vpcontact._cpp" 2>/dev/
 if [ $rebuild -eq 1 ]; then
   log "building vpcontact (C++ kernels, Release)"
   (cd "$ROOT" && "$VENV/bin/pip" install -q --no-build-isolation --no-deps --no-index -e .)
-  touch "$STAMP"
+  echo "$modules" > "$STAMP"
 fi
 
 # Open MPI refuses to run as root unless told otherwise (CI machines run as root).

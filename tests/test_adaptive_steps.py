@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Adaptive time steps from a local error estimate (Milne's device, vpcontact.error_estimate) on
+"""Adaptive time steps from a local error estimate (Milne's device, vpcontact.solver.error_estimate) on
 the paper's 1-D test with its exact solution: the error falls with the tolerance at the rate the
 scheme's order predicts, BDF2 with error control beats uniform BDF2 for the same number of steps,
 and a scene asks for it with ``[time] tolerance``."""
@@ -12,11 +12,12 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from vpcontact import bar1d, cli
+from vpcontact.paper import bar1d
+from vpcontact import cli
 from vpcontact import scene as scenes
-from vpcontact.error_estimate import extrapolation_weights, milne_factor
+from vpcontact.solver import extrapolation_weights, milne_factor
 from vpcontact.errors import InputError
-from vpcontact.stepping import StepControl, advance
+from vpcontact.solver import StepControl, advance
 
 
 def test_milne_factors():

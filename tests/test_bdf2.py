@@ -5,10 +5,10 @@ against its exact solution, where implicit Euler is first order."""
 import numpy as np
 import pytest
 
-from vpcontact import bar1d
-from vpcontact import paper_signorini as paper
+from vpcontact.paper import bar1d
+from vpcontact.paper import signorini as paper
 from vpcontact.errors import InputError
-from vpcontact.stepping import StepControl, advance
+from vpcontact.solver import StepControl, advance
 
 
 def _max_nodal_error(k: float, time_scheme: str, t_final: float = 2.0) -> float:
@@ -87,7 +87,7 @@ def test_scene_time_scheme(tmp_path, capsys):
     from mpi4py import MPI
     from vpcontact import cli
     from vpcontact import scene as scenes
-    from vpcontact.build import build
+    from vpcontact.scene import build
 
     text = scenes.bundled()["normal_compliance_1d"].read_text()
     text = re.sub(r"(?m)^k = .*$", "k = 0.01\nscheme = \"bdf2\"", text)

@@ -14,10 +14,11 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from vpcontact import bar1d, cli
+from vpcontact.paper import bar1d
+from vpcontact import cli
 from vpcontact import scene as scenes
-from vpcontact.build import build
-from vpcontact.constitutive import LinearRate, Perzyna, PlaneStrain
+from vpcontact.scene import build
+from vpcontact.model import LinearRate, Perzyna, PlaneStrain
 
 
 def _write(path: Path, text: str) -> Path:

@@ -6,8 +6,8 @@ results of writing it at every call."""
 import numpy as np
 import pytest
 
-from vpcontact import bar1d
-from vpcontact import paper_signorini as paper
+from vpcontact.paper import bar1d
+from vpcontact.paper import signorini as paper
 
 
 class _Recording:

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from vpcontact import paper_signorini as paper
-from vpcontact.constitutive import Elasticity, LinearRate, Perzyna
+from vpcontact.paper import signorini as paper
+from vpcontact.model import Elasticity, LinearRate, Perzyna
 from vpcontact.errors import InputError
 
 

@@ -12,7 +12,7 @@ import ufl
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
-from vpcontact.expressions import ExpressionError, parse
+from vpcontact.scene import ExpressionError, parse
 
 VALID = [
     "1 + 2*x[0] - x[1]**2 / 4",

@@ -10,7 +10,7 @@ from mpi4py import MPI
 
 from vpcontact import cli
 from vpcontact import scene as scenes
-from vpcontact.build import build
+from vpcontact.scene import build
 
 LEFT, RIGHT, BOTTOM, BODY = 1, 2, 3, 10
 

@@ -13,12 +13,12 @@ import ufl
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from vpcontact import paper_signorini as paper
-from vpcontact.constitutive import Elastic, Elasticity, PlaneStrain
-from vpcontact.contact import NormalCompliance
-from vpcontact.problem import Loads, QuasistaticProblem, tag_facets
-from vpcontact.signorini import Signorini
-from vpcontact.stepping import StepControl, advance
+from vpcontact.paper import signorini as paper
+from vpcontact.model import Elastic, Elasticity, PlaneStrain
+from vpcontact.model import NormalCompliance
+from vpcontact.solver import Loads, QuasistaticProblem, tag_facets
+from vpcontact.model import Signorini
+from vpcontact.solver import StepControl, advance
 
 T = 0.5  # the square flows from t ≈ 0.38 s: past its limit load
 

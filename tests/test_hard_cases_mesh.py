@@ -18,10 +18,10 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
 from vpcontact import kernels
-from vpcontact.constitutive import Elasticity, Perzyna
-from vpcontact.problem import Loads, QuasistaticProblem, tag_facets
-from vpcontact.signorini import Signorini
-from vpcontact.stepping import StepControl, advance
+from vpcontact.model import Elasticity, Perzyna
+from vpcontact.solver import Loads, QuasistaticProblem, tag_facets
+from vpcontact.model import Signorini
+from vpcontact.solver import StepControl, advance
 
 E, NU, SIGMA_Y, MU_STAR = 1e8, 0.3, math.sqrt(10.0), 200.0
 CLAMP, CONTACT = 1, 3

@@ -10,15 +10,16 @@ import textwrap
 import numpy as np
 import pytest
 
-from vpcontact import paper_signorini as paper
-from vpcontact import runner
+from vpcontact.paper import signorini as paper
+from vpcontact.output import runner
 
 pytestmark = [pytest.mark.serial, pytest.mark.mpi]
 
 _SCRIPT = textwrap.dedent("""
     import logging, sys
     logging.getLogger().setLevel(logging.WARNING)
-    from vpcontact import paper_signorini as paper, runner
+    from vpcontact.paper import signorini as paper
+    from vpcontact.output import runner
     problem = paper.signorini_3d(9, 3, 3)
     record, _, _ = runner.run(problem, 1.0, 0.25, out=sys.argv[1], xdmf=False, verbose=False)
     if problem.mesh.comm.rank == 0:
@@ -85,7 +86,7 @@ _PARTITION = textwrap.dedent("""
     import hashlib
     import numpy as np
     from mpi4py import MPI
-    from vpcontact import paper_signorini as paper
+    from vpcontact.paper import signorini as paper
     mesh = paper.signorini_3d(9, 3, 3).mesh
     owned = mesh.topology.index_map(3).size_local
     mine = (owned, hashlib.md5(np.round(mesh.geometry.x, 12).tobytes()).hexdigest())

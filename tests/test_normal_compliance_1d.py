@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from vpcontact import bar1d
+from vpcontact.paper import bar1d
 
 RADII = [0.1, 0.05, 0.02, 0.01]
 PAPER_CONSTANT = 0.9557e-1

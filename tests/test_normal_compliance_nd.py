@@ -29,11 +29,11 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact.constitutive import Elastic, Elasticity, Perzyna
-from vpcontact.contact import NormalCompliance
+from vpcontact.model import Elastic, Elasticity, Perzyna
+from vpcontact.model import NormalCompliance
 from vpcontact.errors import InputError
-from vpcontact.problem import Loads, QuasistaticProblem, tag_facets
-from vpcontact.stepping import StepControl, advance
+from vpcontact.solver import Loads, QuasistaticProblem, tag_facets
+from vpcontact.solver import StepControl, advance
 
 CLAMP, TRACTION, CONTACT = 1, 2, 3
 YOUNG = 1e8
@@ -215,7 +215,7 @@ def test_column_3d_matches_closed_form_and_balances_forces(alpha):
 def test_stiff_foundation_with_alpha_below_one_converges_with_a_line_search():
     """κ = 1, α = 1/2: full Newton steps (the default for elastic laws) cycle at contact onset
     between overshooting past p = 0 and the unsupported prediction (module docstring of
-    vpcontact.contact); with a backtracking line search Newton converges, and quadratically once
+    vpcontact.model.normal_compliance); with a backtracking line search Newton converges, and quadratically once
     the penetration is not tiny (measured: 9, 5, 4, 3, 3, ... iterations from the onset step)."""
     alpha, mu = 0.5, compliance_mu(0.5, 1.0)
     problem = column(2, NormalCompliance(CONTACT, mu=mu, alpha=alpha, gap=GAP),

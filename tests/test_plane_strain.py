@@ -9,10 +9,10 @@ from dolfinx import fem, mesh as dmesh
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
-from vpcontact.constitutive import Elastic, Elasticity, Perzyna, PlaneStrain
+from vpcontact.model import Elastic, Elasticity, Perzyna, PlaneStrain
 from vpcontact.errors import InputError
 from vpcontact.output import CellStress, von_mises
-from vpcontact.problem import Loads, QuasistaticProblem, tag_facets
+from vpcontact.solver import Loads, QuasistaticProblem, tag_facets
 
 E, NU = 1e5, 0.3
 CLAMP, END = 1, 2

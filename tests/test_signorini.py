@@ -8,11 +8,11 @@ import pytest
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from vpcontact import paper_signorini as paper
-from vpcontact import runner
+from vpcontact.paper import signorini as paper
+from vpcontact.output import runner
 from vpcontact.errors import InputError
-from vpcontact.obstacle import gap_along_normal
-from vpcontact.problem import tag_facets
+from vpcontact.model import gap_along_normal
+from vpcontact.solver import tag_facets
 
 
 @pytest.fixture(scope="module")

@@ -16,8 +16,8 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact import paper_signorini as paper
-from vpcontact.stepping import StepControl, advance
+from vpcontact.paper import signorini as paper
+from vpcontact.solver import StepControl, advance
 
 
 def _owned(V):

@@ -9,8 +9,8 @@ vertices too); rates are log–log least-squares slopes.
 import numpy as np
 import pytest
 
-from vpcontact import paper_signorini as paper
-from vpcontact.stepping import StepControl, advance
+from vpcontact.paper import signorini as paper
+from vpcontact.solver import StepControl, advance
 
 pytestmark = pytest.mark.serial  # compares dof arrays of separate meshes gathered on one rank
 

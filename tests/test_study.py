@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from vpcontact import cli, study
+from vpcontact import cli, studies as study
 
 ROOT0 = MPI.COMM_WORLD.rank == 0
 

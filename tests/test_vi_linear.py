@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""The VI's reduced systems solved with lagged full-size factors (vpcontact.vi_linear) give
+"""The VI's reduced systems solved with lagged full-size factors (vpcontact.solver.vi_linear) give
 PETSc's own reduced direct solves' answer with fewer factorizations."""
 
 import numpy as np
@@ -7,8 +7,8 @@ import pytest
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact import paper_signorini as paper
-from vpcontact.problem import QuasistaticProblem
+from vpcontact.paper import signorini as paper
+from vpcontact.solver import QuasistaticProblem
 
 
 def _run(linear: str, steps: int = 6, dt: float = 0.02) -> tuple[QuasistaticProblem, list]:
@@ -109,7 +109,7 @@ def test_inner_multigrid_options_reach_the_level_smoothers():
 
 
 def test_inner_options_are_in_the_database_only_while_read():
-    from vpcontact.vi_linear import options_in_database
+    from vpcontact.solver import options_in_database
     opts = PETSc.Options()
     with options_in_database("vpc_test_", {"pc_type": "ml", "pc_gamg_threshold": 0.02}):
         assert opts.getString("vpc_test_pc_type") == "ml"

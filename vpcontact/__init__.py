@@ -1,5 +1,17 @@
 # SPDX-License-Identifier: MIT
-"""vpcontact: quasistatic frictionless contact of rate-type elastic-viscoplastic bodies."""
+"""vpcontact: quasistatic frictionless contact of rate-type elastic-viscoplastic bodies.
+
+The subpackages follow a run's data flow:
+
+* :mod:`vpcontact.scene`: a TOML scene file, read, validated and built into a model;
+* :mod:`vpcontact.model`: laws σ̇ = E ε(u̇) + G(σ, ε(u)), quadrature state, contact conditions
+  and obstacles (UFL terms, with :mod:`vpcontact.kernels` doing the constitutive work in C++);
+* :mod:`vpcontact.solver`: the discrete problem, one SNES solve per step (VI mode for Signorini),
+  step control;
+* :mod:`vpcontact.output`: the time loop with its XDMF, CSV and PNG outputs and ``summary.json``;
+* :mod:`vpcontact.studies`: convergence and cost studies; :mod:`vpcontact.paper`: the paper's
+  examples with their exact solutions; :mod:`vpcontact.cli`: the command line.
+"""
 import os
 
 # dolfinx partitions meshes with PT-Scotch, whose threads make the partition (and so the

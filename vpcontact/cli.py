@@ -8,7 +8,7 @@
 * ``list``: the bundled scenes. ``show SCENE``: the scene with every default filled in.
 * ``study convergence SCENE``: error against h, k or both, observed orders and error constants;
   ``study cost SCENE``: error against wall time and dofs × steps for every combination of mesh,
-  step, degree and scheme, with the Pareto front (:mod:`vpcontact.study`). Both write CSV,
+  step, degree and scheme, with the Pareto front (:mod:`vpcontact.studies`). Both write CSV,
   Markdown and PNG into ``--out`` (default ``output/<scene name>/study``).
 
 Exit status: 0 on success, 2 for a bad scene or command line (nothing is written), 1 when the
@@ -123,7 +123,7 @@ def _show(args, comm) -> int:
 
 
 def _validate(args, comm) -> int:
-    from vpcontact.build import build
+    from vpcontact.scene.builder import build
     scene = _load(args.scene)
     model = build(scene, comm)  # mesh-level checks: empty or overlapping parts, tags, points
     model.problem.solver.destroy()
@@ -145,8 +145,8 @@ def _petsc_options(pairs) -> dict:
 
 
 def _run(args, comm) -> int:
-    from vpcontact.build import build
-    from vpcontact.session import Session
+    from vpcontact.scene.builder import build
+    from vpcontact.output.session import Session
     scene = _load(args.scene)
     extra = _petsc_options(args.petsc_options)
     if extra:
@@ -161,7 +161,7 @@ def _run(args, comm) -> int:
 
 
 def _study_setup(args, comm):
-    from vpcontact import study
+    from vpcontact.studies import runs as study
     scene = _load(args.scene)
     grid = study.make_grid(scene, args.cells, args.k, args.T)
     out = Path(args.out or Path("output") / scene.name / "study")
@@ -179,7 +179,8 @@ def _study_setup(args, comm):
 
 
 def _study_convergence(args, comm) -> int:
-    from vpcontact import study, study_report
+    from vpcontact.studies import runs as study
+    from vpcontact.studies import report as study_report
     scene, grid, out, progress = _study_setup(args, comm)
     method = study.Method(args.degree, args.law_scheme or scene.law.scheme, args.time_scheme)
     runs, reference = study.convergence(scene, grid, method, args.refine, args.levels, args.exact,
@@ -192,7 +193,8 @@ def _study_convergence(args, comm) -> int:
 
 
 def _study_cost(args, comm) -> int:
-    from vpcontact import study, study_report
+    from vpcontact.studies import runs as study
+    from vpcontact.studies import report as study_report
     scene, grid, out, progress = _study_setup(args, comm)
     methods = study.default_methods(scene)  # P1 and P2
     if args.schemes:

@@ -15,7 +15,7 @@ import ufl
 from dolfinx import fem, io
 from dolfinx import mesh as dmesh
 
-from vpcontact.quadrature import QuadratureState
+from vpcontact.model.quadrature import QuadratureState
 
 _SQRT2 = np.sqrt(2.0)
 

@@ -18,10 +18,10 @@ import ufl
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
-from vpcontact.constitutive import Elasticity, LinearRate
-from vpcontact.contact import NormalCompliance
-from vpcontact.output import CellStress
-from vpcontact.problem import Loads, QuasistaticProblem, tag_facets
+from vpcontact.model.constitutive import Elasticity, LinearRate
+from vpcontact.model.normal_compliance import NormalCompliance
+from vpcontact.output.fields import CellStress
+from vpcontact.solver.problem import Loads, QuasistaticProblem, tag_facets
 
 T_FINAL = 10.0
 GAP = 0.25

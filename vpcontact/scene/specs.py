@@ -11,7 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from vpcontact.expressions import Expression
+from vpcontact.scene.expressions import Expression
 
 __all__ = ["BoundaryPart", "BoxSelector", "ContactSpec", "InitialSpec", "LawSpec", "LoadSpec",
            "MaterialSpec", "MeshSpec", "OutputSpec", "PlaneSelector", "PointLoad", "SolverSpec",

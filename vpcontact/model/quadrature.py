@@ -15,7 +15,7 @@ import numpy as np
 import ufl
 from dolfinx import fem
 
-from vpcontact.tensors import mandel_size, mandel_strain
+from vpcontact.model.tensors import mandel_size, mandel_strain
 
 
 def quadrature_space(mesh, degree: int, size: int) -> fem.FunctionSpace:

@@ -13,8 +13,8 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
-from vpcontact.expressions import Expression, ExpressionError, parse
-from vpcontact.scene_specs import BoxSelector, PlaneSelector
+from vpcontact.scene.expressions import Expression, ExpressionError, parse
+from vpcontact.scene.specs import BoxSelector, PlaneSelector
 
 __all__ = ["dump", "key", "value"]
 

@@ -20,12 +20,12 @@ import ufl
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from vpcontact.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
-from vpcontact.contact import NormalCompliance
+from vpcontact.model.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
+from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.errors import InputError
-from vpcontact.problem import Loads, PointLoad, QuasistaticProblem
-from vpcontact.scene import Scene
-from vpcontact.signorini import Signorini
+from vpcontact.solver.problem import Loads, PointLoad, QuasistaticProblem
+from vpcontact.scene.files import Scene
+from vpcontact.model.signorini import Signorini
 
 _CELL_TYPES = {"interval": dmesh.CellType.interval, "triangle": dmesh.CellType.triangle,
                "quadrilateral": dmesh.CellType.quadrilateral,

@@ -9,9 +9,9 @@
 
 from __future__ import annotations
 
-from vpcontact.expressions import Expression
-from vpcontact.scene_schema import Check, Table, at_least, between, constant_value, greater
-from vpcontact.scene_specs import ContactSpec, LawSpec
+from vpcontact.scene.expressions import Expression
+from vpcontact.scene.schema import Check, Table, at_least, between, constant_value, greater
+from vpcontact.scene.specs import ContactSpec, LawSpec
 
 __all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contact", "read_law"]
 

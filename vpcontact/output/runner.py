@@ -9,10 +9,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
 
-from vpcontact.output import CellStress, ContactHistory, XdmfSeries
-from vpcontact.problem import QuasistaticProblem
-from vpcontact.signorini import ContactReport
-from vpcontact.stepping import StepControl, advance
+from vpcontact.output.fields import CellStress, ContactHistory, XdmfSeries
+from vpcontact.solver.problem import QuasistaticProblem
+from vpcontact.model.signorini import ContactReport
+from vpcontact.solver.stepping import StepControl, advance
 
 
 @dataclass
@@ -48,7 +48,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     """Advance ``problem`` to ``t_final`` with steps of at most ``dt``, writing outputs into ``out``.
 
     A step that does not converge is rejected and retried with half the step, at most
-    ``max_cuts`` times in a row; with ``tolerance`` k also follows a local time-error estimate (see :mod:`vpcontact.stepping`). If it still fails, the outputs of
+    ``max_cuts`` times in a row; with ``tolerance`` k also follows a local time-error estimate (see :mod:`vpcontact.solver.stepping`). If it still fails, the outputs of
     the accepted steps are written, ``record.completed`` stays False and the error is re-raised.
 
     ``history`` records the contact nodes (default: a Signorini problem's); ``progress(step,

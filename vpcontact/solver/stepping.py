@@ -8,7 +8,7 @@ solved easily (at most ``easy_iterations`` iterations) doubles it again up to th
 Steps never overshoot the final time. Every cut is recorded, so a run can report them.
 
 With a ``tolerance`` the step size also follows a local time-error estimate (Milne's device,
-:mod:`vpcontact.error_estimate`): a converged step whose estimate exceeds ``tolerance`` · max|u|
+:mod:`vpcontact.solver.error_estimate`): a converged step whose estimate exceeds ``tolerance`` · max|u|
 is rejected, and every step proposes the next k = k · clip(0.9 (1/ratio)^(1/(p+1)), 0.2, 2)
 (p the scheme's order), still capped by the nominal k. Where the solution has a kink (contact
 onset or release) the estimate grows and the steps shrink there, landing steps near the event.
@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from typing import Iterator, Optional
 
 from vpcontact.errors import ConvergenceError, InputError, NonFiniteStateError, StepRejected
-from vpcontact.problem import QuasistaticProblem, StepReport
+from vpcontact.solver.problem import QuasistaticProblem, StepReport
 
 
 @dataclass(frozen=True)

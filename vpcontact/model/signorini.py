@@ -21,7 +21,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.errors import InputError
-from vpcontact.obstacle import LevelSet, gap_along_normal
+from vpcontact.model.obstacle import LevelSet, gap_along_normal
 
 Gap = Union[float, Callable[[np.ndarray], np.ndarray]]
 

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from vpcontact.output import ContactHistory, boundary_faces, deformed_cells
+from vpcontact.output.fields import ContactHistory, boundary_faces, deformed_cells
 
 
 def _pyplot():

@@ -1,9 +1,9 @@
 # SPDX-License-Identifier: MIT
-"""Reading the tables of a parsed scene file into the section dataclasses of :mod:`scene_specs`.
+"""Reading the tables of a parsed scene file into the section dataclasses of :mod:`vpcontact.scene.specs`.
 
-Every reader reports what is wrong to a :class:`~vpcontact.scene_schema.Report` and goes on, so
+Every reader reports what is wrong to a :class:`~vpcontact.scene.schema.Report` and goes on, so
 one pass finds all problems; the values it returns are only used when no problem was found.
-The physics sections (law, contact) are in :mod:`vpcontact.scene_physics`.
+The physics sections (law, contact) are in :mod:`vpcontact.scene.physics`.
 """
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ import re
 from pathlib import Path
 from typing import Any
 
-from vpcontact.scene_locate import join
-from vpcontact.scene_physics import read_contact, read_law
-from vpcontact.scene_schema import (REQUIRED, Report, Table, at_least, between, fmt, greater, type_name,
+from vpcontact.scene.locate import join
+from vpcontact.scene.physics import read_contact, read_law
+from vpcontact.scene.schema import (REQUIRED, Report, Table, at_least, between, fmt, greater, type_name,
                                     unknown_key)
-from vpcontact.scene_specs import (BUILTIN_MESHES, CELL_TYPES, DIAGONALS, BoundaryPart,
+from vpcontact.scene.specs import (BUILTIN_MESHES, CELL_TYPES, DIAGONALS, BoundaryPart,
                                    BoxSelector, ContactSpec, InitialSpec, LoadSpec, MaterialSpec,
                                    MeshSpec, OutputSpec, PlaneSelector, PointLoad, SolverSpec,
                                    TIME_SCHEMES, TimeSpec)

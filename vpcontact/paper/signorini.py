@@ -24,9 +24,9 @@ import ufl
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-from vpcontact.constitutive import Elasticity, Perzyna
-from vpcontact.problem import Loads, QuasistaticProblem, tag_facets
-from vpcontact.signorini import Signorini
+from vpcontact.model.constitutive import Elasticity, Perzyna
+from vpcontact.solver.problem import Loads, QuasistaticProblem, tag_facets
+from vpcontact.model.signorini import Signorini
 
 YOUNG = 1e8
 POISSON = 0.3

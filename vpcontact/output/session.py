@@ -22,11 +22,11 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
-from vpcontact import plots, runner
-from vpcontact.build import Model
-from vpcontact.nonlinear import time_split
-from vpcontact.output import ContactHistory
-from vpcontact.signorini import Signorini, contact_dofs
+from vpcontact.model.signorini import Signorini, contact_dofs
+from vpcontact.output import plots, runner
+from vpcontact.output.fields import ContactHistory
+from vpcontact.scene.builder import Model
+from vpcontact.solver.step_solver import time_split
 
 
 class Session:

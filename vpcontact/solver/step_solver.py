@@ -21,7 +21,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.errors import ConvergenceError
-from vpcontact.vi_linear import LaggedDirectSolve, LaggedMultigrid, rigid_body_modes
+from vpcontact.solver.vi_linear import LaggedDirectSolve, LaggedMultigrid, rigid_body_modes
 
 _counter = itertools.count()
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
@@ -41,7 +41,7 @@ DEFAULT_OPTIONS = {
     "snes_max_it": 50,
     "ksp_type": "preonly",
     "pc_type": "lu",
-    # Linear solves of SNES VI (vpcontact.vi_linear): "lagged_lu" (GMRES preconditioned by kept
+    # Linear solves of SNES VI (vpcontact.solver.vi_linear): "lagged_lu" (GMRES preconditioned by kept
     # factors of a full-size matrix, refactorized when they stop fitting), "lagged_gamg" (the
     # same with an algebraic multigrid cycle: for large 3-D meshes), or "petsc" (the ksp_/pc_
     # options on the reduced matrix, refactorized every iteration: PETSc's own behaviour).
@@ -211,7 +211,7 @@ class StepSolver:
         _forget(free_prefix, {**self._options, "snes_type": 0, "snes_linesearch_type": 0})
 
     def _use_lagged_solver(self) -> None:
-        """Reduced VI systems solved with a kept full-size preconditioner (vpcontact.vi_linear)."""
+        """Reduced VI systems solved with a kept full-size preconditioner (vpcontact.solver.vi_linear)."""
         inner = {k[len("lagged_"):]: v for k, v in self._options.items()
                  if k.startswith("lagged_")}
         if self._vi_linear == "lagged_lu":

@@ -19,8 +19,8 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Sequence
 
 from vpcontact.errors import InputError
-from vpcontact.expressions import Expression, ExpressionError, parse
-from vpcontact.scene_locate import Locator, join
+from vpcontact.scene.expressions import Expression, ExpressionError, parse
+from vpcontact.scene.locate import Locator, join
 
 __all__ = ["REQUIRED", "Problem", "Report", "SceneError", "Table", "at_least", "between",
            "constant_value", "fmt", "greater", "type_name", "unknown_key"]

@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""Tables (CSV, Markdown) and log–log figures (PNG) of the studies in :mod:`vpcontact.study`."""
+"""Tables (CSV, Markdown) and log–log figures (PNG) of the studies in :mod:`vpcontact.studies`."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from typing import Sequence
 
 import numpy as np
 
-from vpcontact.study import Run, fitted_order, pareto_front
+from vpcontact.studies.runs import Run, fitted_order, pareto_front
 
 _FIELDS = ("method", "level_h", "level_k", "h", "k", "dofs", "steps", "newton_iterations",
            "wall_time_s", "error", "skipped")

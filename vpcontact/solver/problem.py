@@ -22,13 +22,13 @@ import ufl
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
-from vpcontact.contact import NormalCompliance
-from vpcontact.error_estimate import extrapolation_weights, milne_factor, past_nodes
+from vpcontact.model.normal_compliance import NormalCompliance
+from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor, past_nodes
 from vpcontact.errors import InputError, NonFiniteStateError, StepRejected
-from vpcontact.nonlinear import StepSolver
-from vpcontact.quadrature import QuadratureState
-from vpcontact.signorini import ContactMonitor, Signorini, contact_dofs, variable_bounds
-from vpcontact.tensors import as_mandel_matrix, as_mandel_vector, mandel_strain
+from vpcontact.solver.step_solver import StepSolver
+from vpcontact.model.quadrature import QuadratureState
+from vpcontact.model.signorini import ContactMonitor, Signorini, contact_dofs, variable_bounds
+from vpcontact.model.tensors import as_mandel_matrix, as_mandel_vector, mandel_strain
 
 #: A load is a function (x, t) -> UFL expression, x the spatial coordinate, t a time Constant.
 Load = Callable[[ufl.SpatialCoordinate, fem.Constant], ufl.core.expr.Expr]
@@ -69,7 +69,7 @@ class QuasistaticProblem:
     Args:
         mesh: dolfinx mesh.
         facet_tags: meshtags on facets marking Γ1, Γ2 parts and Γ3.
-        law: constitutive law (see :mod:`vpcontact.constitutive`).
+        law: constitutive law (see :mod:`vpcontact.model.constitutive`).
         clamped_tag: facet tag of Γ1 (u = 0); it must mark at least one facet.
         loads: body force and tractions.
         contact: contact condition on Γ3 or None.
@@ -214,7 +214,7 @@ class QuasistaticProblem:
         """Advance from t_{n-1} to t_n = t_{n-1} + dt; on failure the state is rolled back.
 
         With ``tolerance``, a converged step whose local time-error estimate (see
-        :mod:`vpcontact.error_estimate`) exceeds ``tolerance`` · max|u_n| is rolled back too and
+        :mod:`vpcontact.solver.error_estimate`) exceeds ``tolerance`` · max|u_n| is rolled back too and
         :class:`StepRejected` raised; the report of an accepted step carries estimate/tolerance.
         The first step (and BDF2's second) has too little history for an estimate of its order:
         it is checked at order 1 when possible, else accepted unchecked.

@@ -38,11 +38,11 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from vpcontact import scene_toml
-from vpcontact.scene_locate import Locator
-from vpcontact.scene_read import read_scene
-from vpcontact.scene_schema import Problem, Report, SceneError
-from vpcontact.scene_specs import (BoundaryPart, BoxSelector, ContactSpec, InitialSpec, LawSpec,
+from vpcontact.scene import write
+from vpcontact.scene.locate import Locator
+from vpcontact.scene.read import read_scene
+from vpcontact.scene.schema import Problem, Report, SceneError
+from vpcontact.scene.specs import (BoundaryPart, BoxSelector, ContactSpec, InitialSpec, LawSpec,
                                    LoadSpec, MaterialSpec, MeshSpec, OutputSpec, PlaneSelector,
                                    PointLoad, SolverSpec, TimeSpec)
 
@@ -55,7 +55,7 @@ __all__ = ["DEFAULT_SCENE", "MAX_BYTES", "BoundaryPart", "BoxSelector", "Contact
 DEFAULT_SCENE = "signorini_2d"
 #: Largest scene file accepted, in bytes.
 MAX_BYTES = 1_000_000
-SCENES_DIR = Path(__file__).parent / "scenes"
+SCENES_DIR = Path(__file__).parent / "bundled"
 _TOML_POSITION = re.compile(r"\s*\(at line (\d+), column (\d+)\)\s*$")
 _TOML_END = re.compile(r"\s*\(at end of document\)\s*$")
 
@@ -120,7 +120,7 @@ class Scene:
 
     def to_toml(self) -> str:
         """The resolved scene as TOML (all defaults written out); reading it gives an equal scene."""
-        return scene_toml.dump(self)
+        return write.dump(self)
 
 
 def load(path: str | os.PathLike) -> Scene:
@@ -203,7 +203,7 @@ def _default_name(path: Path) -> str:
 
 
 def bundled() -> dict[str, Path]:
-    """The scenes shipped with vpcontact, by name (``vpcontact/scenes/<name>.toml``)."""
+    """The scenes shipped with vpcontact, by name (``vpcontact/scene/bundled/<name>.toml``)."""
     return {p.stem: p for p in sorted(SCENES_DIR.glob("*.toml"))}
 
 
