@@ -19,24 +19,29 @@ LevelSet = Callable[[np.ndarray], np.ndarray]
 
 
 def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
-                     max_distance: float, first_step: float | None = None) -> np.ndarray:
+                     max_distance: float, first_step: float | None = None,
+                     signed: bool = False) -> np.ndarray:
     """Distance from each point to the obstacle {φ ≤ 0} along ``normal``.
 
     Args:
         phi: vectorised level set, φ(x) for x of shape (3, N), > 0 outside the obstacle.
         points: (N, 3) points on Γ3.
-        normal: unit outward normal of Γ3, shape (3,).
+        normal: unit outward normal of Γ3, shape (3,), or one per point, shape (N, 3).
         max_distance: rays longer than this count as missing the obstacle.
         first_step: first marching step (default max_distance / 2**20).
+        signed: points inside the obstacle get g < 0, minus their distance to its surface
+            backwards along the normal (an obstacle that has moved into the body's reference
+            configuration, as an indenter does); otherwise they are an error.
 
     Returns:
-        (N,) gaps g ≥ 0.
+        (N,) gaps (≥ 0 unless ``signed``).
 
     Raises:
-        InputError: φ is not finite, a point starts inside the obstacle, or a ray misses it.
+        InputError: φ is not finite, a point starts inside the obstacle (unless ``signed``), or
+            a ray misses it.
     """
     points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    normal = np.asarray(normal, dtype=np.float64).reshape(3)
+    normal = np.broadcast_to(np.asarray(normal, dtype=np.float64).reshape(-1, 3), points.shape)
     if points.shape[0] == 0:
         return np.zeros(0)
     if not max_distance > 0:
@@ -53,6 +58,14 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
     lo = np.zeros(n)
     f_lo = f(lo)
     inside = f_lo < 0
+    if signed and inside.any():
+        gap = np.empty(n)
+        gap[~inside] = gap_along_normal(phi, points[~inside], normal[~inside],
+                                        max_distance=max_distance, first_step=first_step)
+        gap[inside] = -gap_along_normal(lambda x: -np.asarray(phi(x)), points[inside],
+                                        -normal[inside], max_distance=max_distance,
+                                        first_step=first_step)
+        return gap
     if inside.any():
         x = points[np.argmax(inside)]
         raise InputError(f"contact point {x[:points.shape[1]].tolist()} starts inside the obstacle "
@@ -68,9 +81,10 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
         lo = np.where(open_ & ~crossed, s, lo)
         open_ &= ~crossed
         if open_.any() and s[open_].min() > max_distance:
-            x = points[np.argmax(open_ & (s > max_distance))]
-            raise InputError(f"the ray from contact point {x.tolist()} along the normal "
-                             f"{normal.tolist()} misses the obstacle within {max_distance:g}")
+            i = int(np.argmax(open_ & (s > max_distance)))
+            raise InputError(f"the ray from contact point {points[i].tolist()} along the normal "
+                             f"{normal[i].round(12).tolist()} misses the obstacle within "
+                             f"{max_distance:g}")
         s = np.where(open_, 2.0 * s, s)
 
     # Bisection on [lo, hi] with φ(lo) > 0 ≥ φ(hi): 64 halvings reach machine precision.
@@ -82,3 +96,40 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
         if np.all(hi - lo <= 4 * np.finfo(float).eps * np.maximum(hi, 1e-300)):
             break
     return hi
+
+
+def shape_level_set(shape: str, params: dict, dim: int) -> LevelSet:
+    """Level set φ of a built-in obstacle shape, positive on the body's side.
+
+    * ``plane`` (``point`` p, ``normal`` n towards the body): φ = n̂·(x − p);
+    * ``sphere`` (``center`` c, ``radius`` R; a circle in 2-D): φ = |x − c| − R;
+    * ``cylinder`` (``center`` c on its axis, ``radius`` R, ``axis`` a in 3-D; a circle in 2-D):
+      φ = |(x − c) − ((x − c)·â)â| − R;
+    * ``ellipsoid`` (``center`` c, ``semi_axes`` s along x, y, z; an ellipse in 2-D):
+      φ = min(s) (|((x − c)/s)| − 1), whose zero set is the ellipsoid exactly.
+    """
+    def coords(x):
+        return np.asarray(x, dtype=np.float64)[:dim]
+
+    if shape == "plane":
+        p = np.asarray(params["point"], dtype=np.float64)[:, None]
+        n = np.asarray(params["normal"], dtype=np.float64)
+        n = (n / np.linalg.norm(n))[:, None]
+        return lambda x: np.sum(n * (coords(x) - p), axis=0)
+    c = np.asarray(params["center"], dtype=np.float64)[:, None]
+    if shape == "sphere" or (shape == "cylinder" and dim < 3):
+        radius = float(params["radius"])
+        return lambda x: np.linalg.norm(coords(x) - c, axis=0) - radius
+    if shape == "cylinder":
+        radius = float(params["radius"])
+        a = np.asarray(params["axis"], dtype=np.float64)
+        a = (a / np.linalg.norm(a))[:, None]
+
+        def cylinder(x):
+            r = coords(x) - c
+            return np.linalg.norm(r - np.sum(r * a, axis=0) * a, axis=0) - radius
+        return cylinder
+    if shape == "ellipsoid":
+        s = np.asarray(params["semi_axes"], dtype=np.float64)[:, None]
+        return lambda x: s.min() * (np.linalg.norm((coords(x) - c) / s, axis=0) - 1.0)
+    raise InputError(f"unknown obstacle shape {shape!r}")

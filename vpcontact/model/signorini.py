@@ -1,10 +1,13 @@
 # SPDX-License-Identifier: MIT
 """Signorini contact with a rigid foundation as bounds of a variational inequality.
 
-On a planar Γ3 whose outward normal is a coordinate axis ±e_i, the discrete constraint
-u_ν ≤ g on Γ3 is a bound on single displacement dofs: u_i ≤ g(x) where ν = +e_i and
-u_i ≥ -g(x) where ν = -e_i. PETSc's SNES VI (``vinewtonrsls``) then solves each time step as
-a complementarity problem. Γ3 of any other shape is refused with a clear error.
+The discrete constraint u_ν ≤ g holds at every node of Γ3, ν the outward normal there. On a planar
+Γ3 whose normal is a coordinate axis ±e_i it is a bound on single displacement dofs: u_i ≤ g(x)
+where ν = +e_i and u_i ≥ -g(x) where ν = -e_i (the fast path: no change of variables). On any
+other Γ3 (inclined, curved, piecewise planar) each contact node gets a local frame containing its
+vertex normal (:mod:`vpcontact.model.frames`); SNES then works on ũ = Rᵀu, in which u_ν is again
+a single dof with a bound. Either way PETSc's SNES VI (``vinewtonrsls``) solves each time step as a
+complementarity problem.
 """
 
 from __future__ import annotations
@@ -21,6 +24,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.errors import InputError
+from vpcontact.model.frames import Frames, frames, vertex_normals
 from vpcontact.model.obstacle import LevelSet, gap_along_normal
 
 Gap = Union[float, Callable[[np.ndarray], np.ndarray]]
@@ -33,38 +37,84 @@ class Signorini:
     Attributes:
         tag: facet tag of Γ3.
         gap: constant gap g ≥ 0 or a function g(x) of points (3, N) -> (N,).
-        obstacle: level set φ of a rigid obstacle {φ ≤ 0}; when given, g is the distance to it
+        obstacle: level set φ of a rigid obstacle {φ ≤ 0} (φ > 0 on the body's side), φ(x) of
+            points (3, N), or φ(x, t) when ``obstacle_moves``; when given, g is the distance to it
             along the outward normal (``gap`` is then ignored).
         max_distance: longest ray searched for the obstacle.
+        obstacle_moves: φ depends on t (the gap is recomputed at every step).
+        translation: rigid translation d(t) of the obstacle (t -> (3,) array): the obstacle at t is
+            {x : φ(x - d(t)) ≤ 0}; None: it stays where φ puts it.
     """
 
     tag: int
     gap: Gap = 0.0
-    obstacle: Optional[LevelSet] = None
+    obstacle: Optional[Callable] = None
     max_distance: float = 1e3
+    obstacle_moves: bool = False
+    translation: Optional[Callable[[float], np.ndarray]] = None
 
     def __post_init__(self):
         if isinstance(self.gap, (int, float)) and not (math.isfinite(self.gap) and self.gap >= 0):
             raise InputError(f"Signorini gap g must be finite and >= 0, got {self.gap}")
 
+    @property
+    def moving(self) -> bool:
+        """Whether the gap changes with time."""
+        return self.obstacle is not None and (self.obstacle_moves or self.translation is not None)
+
+    def obstacle_at(self, time: float) -> LevelSet:
+        """The obstacle's level set at ``time``, as a function of points (3, N)."""
+        phi = self.obstacle
+        at_t = (lambda x: phi(x, time)) if self.obstacle_moves else phi
+        if self.translation is None:
+            return at_t
+        d = np.zeros(3)
+        shift = np.asarray(self.translation(time), dtype=np.float64).reshape(-1)
+        d[:len(shift)] = shift
+        return lambda x: at_t(x - d[:, None])
+
 
 @dataclass
 class ContactDofs:
-    """Normal displacement dofs of Γ3 (owned by this rank)."""
+    """The contact nodes of Γ3 owned by this rank and their bounded dofs.
 
-    axis: int                 # normal = sign * e_axis
-    sign: float
-    dofs: np.ndarray          # local indices into u.x.array (owned only)
+    On an axis-aligned planar Γ3 (``axis`` is not None) ν = sign · e_axis at every node and
+    ``dofs`` are displacement components; otherwise ``frames`` holds each node's local frame and
+    ``dofs`` index ũ = Rᵀu (the normal slot of each node's block).
+    """
+
+    axis: Optional[int]       # normal = sign * e_axis on a planar, axis-aligned Γ3; else None
+    sign: float               # that sign (1.0 on a general Γ3)
+    dofs: np.ndarray          # local indices (owned only) of the bounded dofs
     points: np.ndarray        # (n, 3) coordinates
     gap: np.ndarray           # g at the points
+    nodes: np.ndarray         # node (block) indices of the points
+    normals: np.ndarray       # (n, dim) unit outward normals
+    signs: np.ndarray         # per node: ũ_slot = sign u·ν
+    frames: Optional[Frames] = None  # local frames (general Γ3 only)
+
+    @property
+    def rotated(self) -> bool:
+        """Whether SNES works in local frames (ũ = Rᵀu) rather than on u itself."""
+        return self.frames is not None
 
     def normal_displacement(self, u: fem.Function) -> np.ndarray:
-        """u_ν at the contact dofs."""
-        return self.sign * u.x.array[self.dofs]
+        """u_ν at the contact nodes."""
+        return self.normal_component(u.x.array)
+
+    def normal_component(self, values: np.ndarray) -> np.ndarray:
+        """ν · (the entries at the contact nodes) of an array laid out like u's dofs."""
+        if self.axis is not None:
+            return self.sign * values[self.dofs]
+        bs = self.normals.shape[1]
+        return np.einsum("ij,ij->i", values[self.nodes[:, None] * bs + np.arange(bs)],
+                         self.normals)
 
 
-def planar_normal(mesh, facet_tags, tag: int, tol: float = 1e-10) -> tuple[int, float]:
-    """(axis, sign) with ν = sign · e_axis on the facets ``tag``; InputError if not planar/aligned."""
+def axis_aligned_normal(mesh, facet_tags, tag: int,
+                        tol: float = 1e-10) -> Optional[tuple[int, float]]:
+    """(axis, sign) with ν = sign · e_axis on the facets ``tag`` if they form a plane with an
+    axis-aligned normal, else None."""
     ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)(tag)
     n = ufl.FacetNormal(mesh)
     comm = mesh.comm
@@ -79,55 +129,102 @@ def planar_normal(mesh, facet_tags, tag: int, tol: float = 1e-10) -> tuple[int, 
     mean = np.array([integral(n[i]) for i in range(dim)]) / area
     spread = integral(ufl.dot(n - ufl.as_vector(mean.tolist()), n - ufl.as_vector(mean.tolist()))) / area
     if spread > tol or abs(np.linalg.norm(mean) - 1.0) > tol:
-        raise InputError(f"the Signorini contact boundary (tag {tag}) must be planar; its normal "
-                         f"varies (mean normal {np.round(mean, 6).tolist()})")
+        return None
     axis = int(np.argmax(np.abs(mean)))
     if abs(abs(mean[axis]) - 1.0) > 1e-8:
-        raise InputError(f"the Signorini contact boundary (tag {tag}) must have an axis-aligned "
-                         f"normal; its normal is {np.round(mean, 6).tolist()}")
+        return None
     return axis, float(np.sign(mean[axis]))
 
 
 def contact_dofs(V: fem.FunctionSpace, facet_tags, contact: Signorini,
-                 exclude: np.ndarray = np.zeros(0, dtype=np.int32)) -> ContactDofs:
-    """Locate the normal-component dofs of Γ3 and evaluate the gap there.
+                 exclude: np.ndarray = np.zeros(0, dtype=np.int32),
+                 rotate: Optional[bool] = None, time: float = 0.0) -> ContactDofs:
+    """Locate the contact nodes of Γ3, their normals and bounded dofs, and evaluate the gap.
 
-    Dofs in ``exclude`` (the Dirichlet dofs: u = 0 there already) are left out, so that clamp
-    reactions on the edge shared by Γ1 and Γ3 are not reported as contact forces.
+    Dofs in ``exclude`` (the Dirichlet dofs) are prescribed already: a node whose every component
+    is prescribed is left out (so that clamp reactions on the edge shared by Γ1 and Γ3 are not
+    reported as contact forces); at a node with some prescribed components the frame keeps
+    their axes (:mod:`vpcontact.model.frames`). ``rotate``: None or False takes the fast path on
+    an axis-aligned planar Γ3 and local frames otherwise; True forces local frames (identity
+    blocks on an axis-aligned Γ3: one path tested against the other).
     """
     mesh = V.mesh
-    axis, sign = planar_normal(mesh, facet_tags, contact.tag)
+    aligned = axis_aligned_normal(mesh, facet_tags, contact.tag)
+    if aligned is not None and not rotate:
+        return _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time)
+    if V.ufl_element().degree() != 1:
+        raise InputError("a Signorini boundary that is not an axis-aligned plane needs P1 "
+                         "displacements (degree = 1)")
+    bs = V.dofmap.index_map_bs
+    facets = facet_tags.find(contact.tag)
+    weighted = vertex_normals(V, facet_tags, contact.tag)
+    nodes = fem.locate_dofs_topological(V, mesh.topology.dim - 1, facets)
+    nodes = nodes[nodes < V.dofmap.index_map.size_local]
+    prescribed = np.isin(nodes[:, None] * bs + np.arange(bs), exclude)
+    free = ~prescribed.all(axis=1)
+    nodes, prescribed = nodes[free].astype(np.int32), prescribed[free]
+    normals = weighted[nodes]
+    length = np.linalg.norm(normals, axis=1)
+    fr = frames(nodes, normals / np.where(length > 0, length, 1.0)[:, None], prescribed)
+    points = V.tabulate_dof_coordinates()[nodes]
+    dofs = (nodes * bs + fr.slots).astype(np.int32)
+    cd = ContactDofs(None, 1.0, dofs, points, np.zeros(len(nodes)), nodes, fr.normals, fr.signs, fr)
+    cd.gap = contact_gap(contact, cd, time)
+    return cd
+
+
+def _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time) -> ContactDofs:
+    axis, sign = aligned
     sub = V.sub(axis)
     collapsed, _ = sub.collapse()
     facets = facet_tags.find(contact.tag)
-    parent, child = fem.locate_dofs_topological((sub, collapsed), mesh.topology.dim - 1, facets)
-    owned = V.dofmap.index_map.size_local * V.dofmap.index_map_bs
+    parent, child = fem.locate_dofs_topological((sub, collapsed), V.mesh.topology.dim - 1, facets)
+    bs = V.dofmap.index_map_bs
+    owned = V.dofmap.index_map.size_local * bs
     keep = (parent < owned) & ~np.isin(parent, exclude)
-    parent, child = parent[keep], child[keep]
+    parent, child = parent[keep].astype(np.int32), child[keep]
     points = collapsed.tabulate_dof_coordinates()[child]
-    normal = np.zeros(3)
-    normal[axis] = sign
+    normals = np.zeros((len(parent), bs))
+    normals[:, axis] = sign
+    cd = ContactDofs(axis, sign, parent, points, np.zeros(len(parent)),
+                     (parent // bs).astype(np.int32), normals, np.full(len(parent), sign))
+    cd.gap = contact_gap(contact, cd, time)
+    return cd
+
+
+def contact_gap(contact: Signorini, cd: ContactDofs, time: float = 0.0) -> np.ndarray:
+    """g at the contact nodes at time ``time``: the distance along each node's normal to the
+    obstacle (in its position at that time), or the scene's g(x)."""
+    points = cd.points
     if contact.obstacle is not None:
-        gap = gap_along_normal(contact.obstacle, points, normal, max_distance=contact.max_distance)
+        normals = np.zeros((len(points), 3))
+        normals[:, :cd.normals.shape[1]] = cd.normals
+        gap = gap_along_normal(contact.obstacle_at(time), points, normals,
+                               max_distance=contact.max_distance, signed=contact.moving)
     elif callable(contact.gap):
-        gap = np.broadcast_to(np.asarray(contact.gap(points.T), dtype=np.float64), (len(points),)).copy()
+        gap = np.broadcast_to(np.asarray(contact.gap(points.T), dtype=np.float64),
+                              (len(points),)).copy()
     else:
         gap = np.full(len(points), float(contact.gap))
-    if not np.isfinite(gap).all() or (gap < 0).any():
-        raise InputError("the Signorini gap must be finite and >= 0 at every contact point")
-    return ContactDofs(axis, sign, parent.astype(np.int32), points, gap)
+    # A moving obstacle may move into the reference configuration (g < 0 later on), but the
+    # initial state must be admissible.
+    bad = np.flatnonzero(~np.isfinite(gap) | ((gap < 0) & (not contact.moving or time == 0.0)))
+    if len(bad):
+        raise InputError(f"the Signorini gap must be finite and >= 0 at every contact point; it is "
+                         f"{gap[bad[0]]:.6g} at {points[bad[0]].round(12).tolist()}")
+    return gap
 
 
 def variable_bounds(u: fem.Function, cdofs: ContactDofs) -> tuple[PETSc.Vec, PETSc.Vec]:
-    """Bounds for SNES VI: -∞ < u < ∞ except u_axis ≤ g (ν = +e) or u_axis ≥ -g (ν = -e) on Γ3."""
+    """Bounds for SNES VI: -∞ < ũ < ∞ except ũ_slot ≤ g (s = +1) or ũ_slot ≥ -g (s = -1) at
+    each contact node (ũ = u on the fast path, where the slot is the normal axis)."""
     lower = u.vector.duplicate()
     upper = u.vector.duplicate()
     lower.set(PETSc.NINFINITY)
     upper.set(PETSc.INFINITY)
-    if cdofs.sign > 0:
-        upper.array[cdofs.dofs] = cdofs.gap
-    else:
-        lower.array[cdofs.dofs] = -cdofs.gap
+    up = cdofs.signs > 0
+    upper.array[cdofs.dofs[up]] = cdofs.gap[up]
+    lower.array[cdofs.dofs[~up]] = -cdofs.gap[~up]
     for vec in (lower, upper):
         vec.assemble()
     return lower, upper
@@ -148,8 +245,8 @@ class ContactReport:
 class ContactMonitor:
     """Nodal σ_ν on Γ3 from the equilibrium residual R(u) = (σ, ε(v)) - (f, v) at the solution.
 
-    For a Γ3 dof i of the normal component, R_i = ∫_Γ3 σ_ν v_ν da with v_ν = ±φ_i, so the nodal
-    contact pressure is σ_ν,i = ν_axis R_i / ∫_Γ3 φ_i da (lumped).
+    At a contact node i, ν_i · R_i = ∫_Γ3 σ_ν φ_i da (R_i the block of the node's components),
+    so the nodal contact pressure is σ_ν,i = ν_i · R_i / ∫_Γ3 φ_i da (lumped).
     """
 
     def __init__(self, u: fem.Function, cdofs: ContactDofs, equilibrium_form, facet_tags, tag: int):
@@ -160,19 +257,21 @@ class ContactMonitor:
         V = u.function_space
         v = ufl.TestFunction(V)
         ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=facet_tags)(tag)
-        weights = fem.petsc.assemble_vector(fem.form(v[cdofs.axis] * ds))
+        axis = cdofs.axis if cdofs.axis is not None else 0
+        weights = fem.petsc.assemble_vector(fem.form(v[axis] * ds))
         weights.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        self.weights = weights.array[cdofs.dofs].copy()
+        at = cdofs.dofs if cdofs.axis is not None else cdofs.nodes * V.dofmap.index_map_bs
+        self.weights = weights.array[at].copy()
         weights.destroy()
         self.comm = V.mesh.comm
 
     def nodal_forces(self) -> np.ndarray:
-        """ν_axis R_i at the contact dofs (= ∫ σ_ν φ_i da)."""
+        """ν_i · R_i at the contact nodes (= ∫ σ_ν φ_i da)."""
         with self._vec.localForm() as local:
             local.set(0.0)
         fem.petsc.assemble_vector(self._vec, self._form)
         self._vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return self.cdofs.sign * self._vec.array[self.cdofs.dofs]
+        return self.cdofs.normal_component(self._vec.array)
 
     def report(self, active_tol: float = 1e-10) -> ContactReport:
         forces = self.nodal_forces()

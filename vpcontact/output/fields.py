@@ -124,7 +124,8 @@ class ContactHistory:
         self._pressure = pressure
         self.comm = problem.mesh.comm
         self.points = _gather(self.comm, cd.points)
-        self.gap = _gather(self.comm, cd.gap)
+        self.gap = _gather(self.comm, cd.gap)  # at t = 0
+        self.gaps: list[np.ndarray] = []      # at each recorded time (obstacles may move)
         self.times: list[float] = []
         self.normal_displacement: list[np.ndarray] = []
         self.pressure: list[np.ndarray] = []
@@ -140,7 +141,9 @@ class ContactHistory:
         cd = self.cdofs
         un = _gather(self.comm, cd.normal_displacement(self.problem.u))
         p = _gather(self.comm, self.local_pressure())
+        g = _gather(self.comm, cd.gap)
         if self.comm.rank == 0:
+            self.gaps.append(g)
             self.times.append(t)
             self.normal_displacement.append(un)
             self.pressure.append(p)
@@ -151,8 +154,9 @@ class ContactHistory:
         if self.comm.rank == 0:
             with open(path, "w") as f:
                 f.write("t,x,y,z,u_normal,gap,pressure\n")
-                for t, un, p in zip(self.times, self.normal_displacement, self.pressure):
-                    for (x, y, z), u_i, g_i, p_i in zip(self.points, un, self.gap, p):
+                for t, un, gap, p in zip(self.times, self.normal_displacement, self.gaps,
+                                         self.pressure):
+                    for (x, y, z), u_i, g_i, p_i in zip(self.points, un, gap, p):
                         f.write(f"{t:.10g},{x:.10g},{y:.10g},{z:.10g},"
                                 f"{u_i:.10e},{g_i:.10e},{p_i:.10e}\n")
         self.comm.barrier()

@@ -25,7 +25,7 @@ from mpi4py import MPI
 from vpcontact.model.signorini import Signorini, contact_dofs
 from vpcontact.output import plots, runner
 from vpcontact.output.fields import ContactHistory
-from vpcontact.scene.builder import Model
+from vpcontact.scene.builder import Model, obstacle_level_set
 from vpcontact.solver.step_solver import time_split
 
 
@@ -81,10 +81,14 @@ class Session:
             return ContactHistory(problem)
         law = problem.contact
         gap = scene.contact.gap
-        spec = Signorini(law.tag, gap=0.0 if gap is None or gap.is_constant and gap.value() == 0
-                         else (lambda x: gap.numpy(x)))
-        clamped = problem.bcs[0].dof_indices()[0]
-        cdofs = contact_dofs(problem.V, self.model.facet_tags, spec, exclude=clamped)
+        if scene.contact.obstacle is not None:  # the foundation's surface: same nodal gaps
+            phi, _ = obstacle_level_set(scene)
+            spec = Signorini(law.tag, obstacle=phi, max_distance=scene.contact.max_distance)
+        else:
+            spec = Signorini(law.tag, gap=0.0 if gap is None or gap.is_constant and gap.value() == 0
+                             else (lambda x: gap.numpy(x)))
+        cdofs = contact_dofs(problem.V, self.model.facet_tags, spec,
+                             exclude=problem.dirichlet.prescribed)
 
         def pressure(u):
             penetration = np.maximum(cdofs.normal_displacement(u) - cdofs.gap, 0.0)

@@ -17,7 +17,7 @@ from typing import Dict, Optional
 
 import numpy as np
 import ufl
-from dolfinx import mesh as dmesh
+from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
 from vpcontact.model.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
@@ -25,7 +25,10 @@ from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.errors import InputError
 from vpcontact.solver.problem import Loads, PointLoad, QuasistaticProblem
 from vpcontact.scene.files import Scene
-from vpcontact.model.signorini import Signorini
+from vpcontact.scene.specs import ObstacleShape
+from vpcontact.model.obstacle import shape_level_set
+from vpcontact.model.signorini import Signorini, axis_aligned_normal, contact_dofs
+from vpcontact.solver.dirichlet import Dirichlet
 
 _CELL_TYPES = {"interval": dmesh.CellType.interval, "triangle": dmesh.CellType.triangle,
                "quadrilateral": dmesh.CellType.quadrilateral,
@@ -61,11 +64,10 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
                           f"{limit:.4g} of the explicit scheme (2/L from the law's data); use "
                           "scheme = \"implicit\" or a smaller k")
     loads = _loads(scene, part_tags)
-    contact, contact_tag = _contact(scene, part_tags, mesh)
-    clamped = [part_tags[n] for n, p in scene.boundaries.items() if p.kind == "clamped"]
-    facet_tags = _merge_clamped(mesh, facet_tags, clamped)
+    dirichlet = _dirichlet(scene, part_tags, mesh, facet_tags)
     try:
-        problem = QuasistaticProblem(mesh, facet_tags, law, clamped_tag=clamped[0], loads=loads,
+        contact, contact_tag = _contact(scene, part_tags, mesh, facet_tags)
+        problem = QuasistaticProblem(mesh, facet_tags, law, loads=loads, dirichlet=dirichlet,
                                      contact=contact, degree=scene.degree,
                                      petsc_options=dict(scene.solver.petsc_options),
                                      predictor=scene.solver.predictor,
@@ -171,13 +173,33 @@ def _selector(part, extent: float):
     return lambda x: np.asarray(expr.numpy(x), dtype=bool) & np.ones(x.shape[1], dtype=bool)
 
 
-def _merge_clamped(mesh, tags, clamped):
-    """Several clamped parts become one Γ1 tag (the first one's)."""
-    if len(clamped) == 1:
-        return tags
-    values = tags.values.copy()
-    values[np.isin(values, clamped)] = clamped[0]
-    return dmesh.meshtags(mesh, tags.dim, tags.indices, values)
+def _dirichlet(scene: Scene, part_tags, mesh, facet_tags) -> list:
+    """The clamped, prescribed-displacement and symmetry parts, in scene order."""
+    dim = scene.dim
+    parts = []
+    for name, part in scene.boundaries.items():
+        tag = part_tags[name]
+        if part.kind == "clamped":
+            parts.append(Dirichlet.clamped(tag, dim, name))
+        elif part.kind == "displacement":
+            parts.append(Dirichlet(tag, tuple(_component(e) for e in part.displacement), name))
+        elif part.kind == "symmetry":
+            aligned = axis_aligned_normal(mesh, facet_tags, tag) if dim > 1 else (0, 1.0)
+            if aligned is None:
+                raise scene.error(f"boundary.{name}", f"symmetry part '{name}' must be a plane "
+                                  "with an axis-aligned normal (u·n = 0 is imposed on the normal "
+                                  "component); for other planes prescribe components instead")
+            parts.append(Dirichlet.symmetry(tag, dim, aligned[0], name))
+    return parts
+
+
+def _component(expression):
+    """A prescribed component: None (free), a number, or a function (x, t) -> values."""
+    if expression is None:
+        return None
+    if expression.is_constant:
+        return expression.value()
+    return lambda x, t, e=expression: e.numpy(x, t)
 
 
 def _law(scene: Scene):
@@ -228,25 +250,55 @@ def _loads(scene: Scene, part_tags) -> Loads:
     return loads
 
 
-def _contact(scene: Scene, part_tags, mesh):
+def obstacle_level_set(scene: Scene):
+    """The obstacle of ``[contact]`` as a function φ(x) or φ(x, t), and whether it takes t."""
+    obstacle = scene.contact.obstacle
+    if isinstance(obstacle, ObstacleShape):
+        return shape_level_set(obstacle.shape, dict(obstacle.params), scene.dim), False
+    if obstacle.depends_on_time:
+        return (lambda x, t: obstacle.numpy(x, t)), True
+    return (lambda x: obstacle.numpy(x)), False
+
+
+def _contact(scene: Scene, part_tags, mesh, facet_tags):
     spec = scene.contact
     if spec is None or spec.type == "none":
         return None, None
     tag = part_tags[spec.boundary]
     gap = spec.gap
     if spec.type == "normal_compliance":
-        if gap is None or gap.is_constant:
+        if spec.obstacle is not None:
+            g = _foundation_gap(scene, mesh, facet_tags, tag)
+        elif gap is None or gap.is_constant:
             g = 0.0 if gap is None else gap.value()
         else:
             g = gap.ufl(ufl.SpatialCoordinate(mesh), 0.0)
         return NormalCompliance(tag, mu=spec.mu, alpha=spec.alpha, gap=g), tag
     if spec.obstacle is not None:
-        phi = spec.obstacle
-        return Signorini(tag, obstacle=lambda x: phi.numpy(x),
-                         max_distance=spec.max_distance or 1e3), tag
+        phi, moves = obstacle_level_set(scene)
+        motion = spec.motion
+        translation = (None if motion is None or all(e.is_constant and e.value() == 0.0
+                                                       for e in motion)
+                       else (lambda t: np.array([e.value(t) for e in motion])))
+        return Signorini(tag, obstacle=phi, max_distance=spec.max_distance or 1e3,
+                         obstacle_moves=moves, translation=translation), tag
     if gap is None or gap.is_constant:
         return Signorini(tag, gap=0.0 if gap is None else gap.value()), tag
     return Signorini(tag, gap=lambda x: gap.numpy(x)), tag
+
+
+def _foundation_gap(scene: Scene, mesh, facet_tags, tag: int):
+    """Normal compliance against a foundation surface: g at each node of Γ3 is the distance to
+    it along the node's normal (as for a Signorini obstacle), interpolated by P1 functions."""
+    phi, _ = obstacle_level_set(scene)
+    V = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
+    cd = contact_dofs(V, facet_tags, Signorini(tag, obstacle=phi,
+                                               max_distance=scene.contact.max_distance or 1e3),
+                      rotate=True)
+    g = fem.Function(fem.FunctionSpace(mesh, ("Lagrange", 1)), name="gap")
+    g.x.array[cd.nodes] = cd.gap
+    g.x.scatter_forward()
+    return g
 
 
 def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
@@ -277,7 +329,9 @@ def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
 
 def _blame(scene: Scene, message: str) -> str:
     """The scene key an InputError from the problem set-up is most likely about."""
-    for key, path in (("time scheme", "time.scheme"), ("clamped", "boundary"), ("gap", "contact.gap"), ("contact", "contact"),
+    for key, path in (("time scheme", "time.scheme"), ("clamped", "boundary"),
+                      ("Dirichlet", "boundary"), ("obstacle", "contact.obstacle"),
+                      ("gap", "contact.gap"), ("contact", "contact"),
                       ("point load", "loads.point"), ("Poisson", "material.nu"),
                       ("Young", "material.E")):
         if key in message:

@@ -11,12 +11,13 @@ from __future__ import annotations
 
 from vpcontact.scene.expressions import Expression
 from vpcontact.scene.schema import Check, Table, at_least, between, constant_value, greater
-from vpcontact.scene.specs import ContactSpec, LawSpec
+from vpcontact.scene.locate import join
+from vpcontact.scene.specs import SHAPES, ContactSpec, LawSpec, ObstacleShape
 
 __all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contact", "read_law"]
 
 LAW_KEYS = ("type", "scheme", "sigma_y", "mu_star", "yield_set", "a", "b")
-CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "max_distance", "mu", "alpha")
+CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "motion", "max_distance", "mu", "alpha")
 LAW_TYPES = ("elastic", "perzyna", "linear")
 SCHEMES = ("explicit", "implicit")
 DEFAULT_SCHEME = {"elastic": "explicit", "perzyna": "implicit", "linear": "explicit"}
@@ -85,18 +86,62 @@ def read_contact(top: Table, dim: int | None) -> ContactSpec | None:
     if kind == "signorini":
         for key in ("mu", "alpha"):
             t.forbid(key, "only for type = 'normal_compliance'")
-        if t.has("obstacle"):
-            if t.has("gap"):
-                t.add("gap", "give either gap or obstacle, not both")
-            return ContactSpec(kind, boundary, obstacle=t.expr("obstacle", ("x",), dim),
-                               max_distance=t.number("max_distance", DEFAULT_MAX_DISTANCE,
-                                                     check=greater(0)))
-        t.forbid("max_distance", "only with an obstacle")
+    if t.has("obstacle"):
+        if t.has("gap"):
+            t.add("gap", "give either gap or obstacle, not both")
+        if kind == "normal_compliance":
+            t.forbid("motion", "a foundation surface stays where it is (moving obstacles are "
+                               "for type = 'signorini')")
+        obstacle = _obstacle(t, dim, moving=kind == "signorini")
+        motion = (t.exprs("motion", ("t",), dim, dim) if t.has("motion") and kind == "signorini"
+                  else None)
+        return ContactSpec(kind, boundary, obstacle=obstacle, motion=motion,
+                           max_distance=t.number("max_distance", DEFAULT_MAX_DISTANCE,
+                                                 check=greater(0)),
+                           mu=t.number("mu", check=greater(0)) if kind != "signorini" else None,
+                           alpha=(t.number("alpha", 1.0, check=between(0.0, 1.0, "(]"))
+                                  if kind != "signorini" else None))
+    t.forbid("max_distance", "only with an obstacle")
+    t.forbid("motion", "only with an obstacle")
+    if kind == "signorini":
         return ContactSpec(kind, boundary, gap=_gap(t, dim))
-    for key in ("obstacle", "max_distance"):
-        t.forbid(key, "only for type = 'signorini'")
     return ContactSpec(kind, boundary, gap=_gap(t, dim), mu=t.number("mu", check=greater(0)),
                        alpha=t.number("alpha", 1.0, check=between(0.0, 1.0, "(]")))
+
+
+def _obstacle(t: Table, dim: int | None, moving: bool) -> Expression | ObstacleShape | None:
+    """``obstacle``: a level-set expression φ(x) (φ(x, t) for a moving rigid obstacle) or a
+    built-in shape ``{ shape = "sphere", center = [...], radius = R }`` (see ``SHAPES``)."""
+    if not isinstance(t.data.get("obstacle"), dict):
+        return t.expr("obstacle", ("x", "t") if moving else ("x",), dim)
+    s = t.table("obstacle", ("shape",) + tuple(sorted({k for ks in SHAPES.values() for k in ks})))
+    shape = s.choice("shape", tuple(SHAPES))
+    if shape is None:
+        return None
+    for key in s.data:
+        if key != "shape" and key not in SHAPES[shape]:
+            s.add(key, f"not a parameter of shape {shape!r} (its parameters: "
+                       f"{', '.join(SHAPES[shape])})")
+    params = []
+    for key in SHAPES[shape]:
+        if key == "radius":
+            value = s.number("radius", check=greater(0))
+        elif key == "axis" and dim is not None and dim < 3:
+            s.forbid("axis", "a cylinder's axis is the z axis in 2-D (a circle)")
+            continue
+        else:
+            value = s.numbers(key, dim)
+            if value is not None and key in ("normal", "axis") and not any(value):
+                s.add(key, "must not be the zero vector")
+                value = None
+            if value is not None and key == "semi_axes" and min(value) <= 0:
+                s.report.add(join(s.at(key), int(min(range(len(value)), key=value.__getitem__))),
+                             "semi-axes must be > 0")
+                value = None
+        if value is None:
+            return None
+        params.append((key, value))
+    return ObstacleShape(shape, tuple(params))
 
 
 def _gap(t: Table, dim: int | None) -> Expression | None:

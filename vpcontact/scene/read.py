@@ -27,9 +27,11 @@ __all__ = ["TOP_KEYS", "read_scene"]
 TOP_KEYS = ("name", "description", "mesh", "boundary", "loads", "material", "law", "contact",
             "initial", "time", "discretization", "solver", "output")
 MESH_KEYS = ("type", "lower", "upper", "cells", "cell_type", "diagonal", "file", "dim")
-PART_KEYS = ("kind", "tag", "plane", "box", "where", "traction")
+PART_KEYS = ("kind", "tag", "plane", "box", "where", "traction", "displacement")
 SELECTORS = ("tag", "plane", "box", "where")
-KINDS = ("clamped", "traction", "contact")
+KINDS = ("clamped", "displacement", "symmetry", "traction", "contact")
+#: Kinds that prescribe displacement components (Dirichlet parts).
+DIRICHLET_KINDS = ("clamped", "displacement", "symmetry")
 PART_NAME = r"[A-Za-z_][A-Za-z0-9_]*"
 SCENE_NAME = r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}"
 PETSC_KEY = r"[A-Za-z0-9_]+"
@@ -178,12 +180,17 @@ def _read_part(t: Table, name: str, mesh: MeshSpec | None) -> BoundaryPart:
         box = _read_box(t, dim)
     if t.has("where"):
         where = t.expr("where", ("x",), dim, condition=True)
-    traction = None
+    traction = displacement = None
     if kind == "traction":
         traction = t.exprs("traction", ("x", "t"), dim, dim, zeros(dim))
     elif kind is not None:
         t.forbid("traction", "only for kind = 'traction'")
-    return BoundaryPart(name, kind, tag=tag, plane=plane, box=box, where=where, traction=traction)
+    if kind == "displacement":
+        displacement = t.exprs("displacement", ("x", "t"), dim, dim, free=True)
+    elif kind is not None:
+        t.forbid("displacement", "only for kind = 'displacement'")
+    return BoundaryPart(name, kind, tag=tag, plane=plane, box=box, where=where, traction=traction,
+                        displacement=displacement)
 
 
 def _read_plane(t: Table, dim: int | None) -> PlaneSelector | None:
@@ -219,10 +226,12 @@ def _read_box(t: Table, dim: int | None) -> BoxSelector | None:
 
 def check_parts(report: Report, parts: dict[str, BoundaryPart], contact: ContactSpec | None,
                 has_contact_table: bool) -> None:
-    """Cross checks: a clamped part exists; contact parts match ``[contact]``."""
-    if not any(part.kind == "clamped" for part in parts.values()):
-        report.add("boundary", "no boundary part has kind = 'clamped'; at least one is needed "
-                               "(the clamped part Γ1 must have positive measure)")
+    """Cross checks: a Dirichlet part exists; contact parts match ``[contact]``. (Whether the
+    Dirichlet parts hold the body is checked on the mesh, by the builder.)"""
+    if not any(part.kind in DIRICHLET_KINDS for part in parts.values()):
+        report.add("boundary", "no boundary part has kind = 'clamped', 'displacement' or "
+                               "'symmetry'; at least one is needed (Γ1 must have positive "
+                               "measure, and the Dirichlet parts must hold the body)")
     if contact is None:
         return
     for name, part in parts.items():

@@ -314,8 +314,10 @@ class Table:
         return _expression(self.report, self.at(key), raw, names, dim, condition)
 
     def exprs(self, key: str, names: Sequence[str], dim: int | None, length: int | None,
-              default: Any = REQUIRED) -> Any:
-        """A tuple of ``length`` value expressions; ``default`` may be a tuple of numbers."""
+              default: Any = REQUIRED, free: bool = False) -> Any:
+        """A tuple of ``length`` value expressions; ``default`` may be a tuple of numbers. With
+        ``free``, an entry ``"free"`` stands for no value (``None``), and one entry at least
+        must be a value."""
         given, raw = self._get(key, default)
         if not given:
             return raw if raw is None else tuple(parse(v, names=names) for v in raw)
@@ -326,9 +328,14 @@ class Table:
         if length is not None and len(raw) != length:
             self.add(key, f"expected {length} components, got {len(raw)}")
             return None
-        items = [_expression(self.report, join(self.at(key), i), item, names, dim, False)
+        if free and raw and all(item == "free" for item in raw):
+            self.add(key, "every component is 'free': give a value to at least one")
+            return None
+        items = [None if free and item == "free" else
+                 _expression(self.report, join(self.at(key), i), item, names, dim, False)
                  for i, item in enumerate(raw)]
-        return None if any(item is None for item in items) else tuple(items)
+        bad = [i for i, item in enumerate(items) if item is None and not (free and raw[i] == "free")]
+        return None if bad else tuple(items)
 
     def section(self, key: str, keys: Sequence[str], required: bool = False) -> Table:
         """The sub-table ``key``; an empty table (all defaults) if it is absent or invalid."""

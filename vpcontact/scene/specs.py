@@ -14,8 +14,8 @@ from pathlib import Path
 from vpcontact.scene.expressions import Expression
 
 __all__ = ["BoundaryPart", "BoxSelector", "ContactSpec", "InitialSpec", "LawSpec", "LoadSpec",
-           "MaterialSpec", "MeshSpec", "OutputSpec", "PlaneSelector", "PointLoad", "SolverSpec",
-           "TimeSpec", "BUILTIN_MESHES", "CELL_TYPES", "DIAGONALS"]
+           "MaterialSpec", "MeshSpec", "ObstacleShape", "OutputSpec", "PlaneSelector", "PointLoad",
+           "SolverSpec", "TimeSpec", "BUILTIN_MESHES", "CELL_TYPES", "DIAGONALS", "SHAPES"]
 
 #: Time schemes of the constitutive law (``[time] scheme``).
 TIME_SCHEMES = ("euler", "bdf2")
@@ -25,6 +25,9 @@ BUILTIN_MESHES = {"interval": 1, "rectangle": 2, "box": 3}
 CELL_TYPES = {"interval": 1, "triangle": 2, "quadrilateral": 2, "tetrahedron": 3, "hexahedron": 3}
 #: Diagonal patterns of 2-D triangle meshes (dolfinx ``DiagonalType`` names).
 DIAGONALS = ("right", "left", "crossed", "left/right", "right/left")
+#: Built-in obstacle shapes and their parameters (``[contact] obstacle = { shape = ... }``).
+SHAPES = {"plane": ("point", "normal"), "sphere": ("center", "radius"),
+          "cylinder": ("center", "radius", "axis"), "ellipsoid": ("center", "semi_axes")}
 
 
 @dataclass(frozen=True)
@@ -86,12 +89,16 @@ class BoundaryPart:
 
     Attributes:
         name: the part's name.
-        kind: ``"clamped"`` (Γ1), ``"traction"`` (Γ2) or ``"contact"`` (Γ3).
+        kind: ``"clamped"`` (u = 0), ``"displacement"`` (u = u_D(x, t), some components),
+            ``"symmetry"`` (u·n = 0 on an axis-aligned plane), ``"traction"`` (Γ2) or
+            ``"contact"`` (Γ3).
         tag: Gmsh physical facet tag, or ``None``.
         plane: plane selector, or ``None``.
         box: box selector, or ``None``.
         where: boolean expression in x, or ``None``.
         traction: surface traction f_2(x, t) (traction parts only, else ``None``).
+        displacement: u_D(x, t) per component, ``None`` for a free one (displacement parts
+            only, else ``None``).
     """
 
     name: str
@@ -101,6 +108,7 @@ class BoundaryPart:
     box: BoxSelector | None = None
     where: Expression | None = None
     traction: tuple[Expression, ...] | None = None
+    displacement: tuple[Expression | None, ...] | None = None
 
     @property
     def selector(self) -> str:
@@ -159,6 +167,19 @@ class LawSpec:
 
 
 @dataclass(frozen=True)
+class ObstacleShape:
+    """A built-in obstacle shape (see :data:`SHAPES`): its name and parameters, with the body on
+    the side where its level set is positive (outside a sphere, cylinder or ellipsoid; on the
+    side a plane's ``normal`` points to)."""
+
+    shape: str
+    params: tuple[tuple[str, tuple[float, ...] | float], ...]
+
+    def get(self, name: str):
+        return dict(self.params)[name]
+
+
+@dataclass(frozen=True)
 class ContactSpec:
     """``[contact]``: the contact condition on the part named ``boundary``.
 
@@ -166,7 +187,11 @@ class ContactSpec:
         type: ``"none"``, ``"signorini"`` or ``"normal_compliance"``.
         boundary: name of the contact part (``None`` for type none).
         gap: initial gap g(x) (``None`` for type none or with an obstacle).
-        obstacle: level set φ(x) of a rigid obstacle {φ ≤ 0} (Signorini only), or ``None``.
+        obstacle: a rigid obstacle (Signorini) or the foundation's surface (normal compliance):
+            a level set φ(x) or φ(x, t) of {φ ≤ 0}, a built-in :class:`ObstacleShape`, or
+            ``None``.
+        motion: rigid translation d(t) of the obstacle (one expression of t per component), or
+            ``None``.
         max_distance: longest ray searched for the obstacle (with an obstacle only).
         mu: deformability μ of the foundation (normal compliance only).
         alpha: exponent α of normal compliance (normal compliance only).
@@ -175,7 +200,8 @@ class ContactSpec:
     type: str = "none"
     boundary: str | None = None
     gap: Expression | None = None
-    obstacle: Expression | None = None
+    obstacle: Expression | ObstacleShape | None = None
+    motion: tuple[Expression, ...] | None = None
     max_distance: float | None = None
     mu: float | None = None
     alpha: float | None = None

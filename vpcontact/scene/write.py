@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from vpcontact.scene.expressions import Expression, ExpressionError, parse
-from vpcontact.scene.specs import BoxSelector, PlaneSelector
+from vpcontact.scene.specs import BoxSelector, ObstacleShape, PlaneSelector
 
 __all__ = ["dump", "key", "value"]
 
@@ -73,6 +73,10 @@ def value(item: Any) -> str:
         return value({k: v for k, v in entries.items() if v is not None})
     if isinstance(item, BoxSelector):
         return value({"lower": item.lower, "upper": item.upper})
+    if isinstance(item, ObstacleShape):
+        return value({"shape": item.shape, **dict(item.params)})
+    if item is None:
+        return '"free"'  # a free component of a prescribed displacement
     if isinstance(item, dict):
         if not item:
             return "{}"
@@ -100,7 +104,7 @@ def dump(scene: Any) -> str:
     for name, part in scene.boundaries.items():
         blocks += _table(f"boundary.{key(name)}", {
             "kind": part.kind, "tag": part.tag, "plane": part.plane, "box": part.box,
-            "where": part.where, "traction": part.traction})
+            "where": part.where, "traction": part.traction, "displacement": part.displacement})
     blocks += _table("loads", {"body_force": scene.loads.body_force})
     for point in scene.loads.point:
         blocks += ["[[loads.point]]"] + _table("", {"at": point.at, "force": point.force})
@@ -112,7 +116,8 @@ def dump(scene: Any) -> str:
     if contact.type != "none":
         blocks += _table("contact", {
             "type": contact.type, "boundary": contact.boundary, "gap": contact.gap,
-            "obstacle": contact.obstacle, "max_distance": contact.max_distance, "mu": contact.mu,
+            "obstacle": contact.obstacle, "motion": contact.motion,
+            "max_distance": contact.max_distance, "mu": contact.mu,
             "alpha": contact.alpha})
     blocks += _table("initial", {"u0": scene.initial.u0, "sigma0": scene.initial.sigma0})
     time = scene.time

@@ -20,14 +20,19 @@ from typing import Callable, Dict, List, Optional, Sequence
 import numpy as np
 import ufl
 from dolfinx import fem, mesh as dmesh
+import dolfinx.fem.petsc  # noqa: F401  (fem.petsc)
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor, past_nodes
 from vpcontact.errors import InputError, NonFiniteStateError, StepRejected
 from vpcontact.solver.step_solver import StepSolver
 from vpcontact.model.quadrature import QuadratureState
-from vpcontact.model.signorini import ContactMonitor, Signorini, contact_dofs, variable_bounds
+from vpcontact.model.frames import rotation_matrix
+from vpcontact.model.signorini import (ContactMonitor, Signorini, contact_dofs, contact_gap,
+                                       variable_bounds)
+from vpcontact.solver.dirichlet import Dirichlet, DirichletParts
 from vpcontact.model.tensors import as_mandel_matrix, as_mandel_vector, mandel_strain
 
 #: A load is a function (x, t) -> UFL expression, x the spatial coordinate, t a time Constant.
@@ -64,13 +69,17 @@ class Loads:
 
 
 class QuasistaticProblem:
-    """Time-stepping solver for a viscoplastic body clamped on Γ1, loaded, in contact on Γ3.
+    """Time-stepping solver for a viscoplastic body held on Γ1, loaded, in contact on Γ3.
 
     Args:
         mesh: dolfinx mesh.
         facet_tags: meshtags on facets marking Γ1, Γ2 parts and Γ3.
         law: constitutive law (see :mod:`vpcontact.model.constitutive`).
-        clamped_tag: facet tag of Γ1 (u = 0); it must mark at least one facet.
+        clamped_tag: facet tag of a clamped Γ1 (u = 0); it must mark at least one facet. None:
+            ``dirichlet`` alone holds the body.
+        dirichlet: further Dirichlet parts (prescribed displacements, symmetry planes; see
+            :mod:`vpcontact.solver.dirichlet`). Without a clamped part they must remove every
+            rigid motion.
         loads: body force and tractions.
         contact: contact condition on Γ3 or None.
         degree: polynomial degree of the displacement (1 = the paper's P1/P0 pairing).
@@ -86,12 +95,17 @@ class QuasistaticProblem:
         time_scheme: "euler" (the paper's: implicit or explicit Euler, as the law says) or
             "bdf2" (second-order backward differentiation of the law, for implicit laws; the
             first step is implicit Euler; see :class:`_Bdf2`).
+        rotate_contact: Signorini only. None: local frames at the contact nodes where Γ3 is not
+            an axis-aligned plane, plain dofs where it is; True: local frames always (identity
+            frames on an axis-aligned Γ3, to test one path against the other).
     """
 
-    def __init__(self, mesh, facet_tags, law, clamped_tag: int, loads: Loads = Loads(),
-                 contact=None, degree: int = 1, petsc_options: Optional[dict] = None,
-                 options_prefix: Optional[str] = None, predictor: str = "linear",
-                 unstable_steps: str = "error", time_scheme: str = "euler"):
+    def __init__(self, mesh, facet_tags, law, clamped_tag: Optional[int] = None,
+                 loads: Loads = Loads(), contact=None, degree: int = 1,
+                 petsc_options: Optional[dict] = None, options_prefix: Optional[str] = None,
+                 predictor: str = "linear", unstable_steps: str = "error",
+                 time_scheme: str = "euler", dirichlet: Sequence[Dirichlet] = (),
+                 rotate_contact: Optional[bool] = None):
         if predictor not in ("linear", "none"):
             raise InputError(f"predictor must be 'linear' or 'none', got {predictor!r}")
         if unstable_steps not in ("error", "warn"):
@@ -110,14 +124,20 @@ class QuasistaticProblem:
         self.dt = 0.0
         self._tangent_key = None  # the step whose tangent the state holds (affine laws only)
 
-        clamped = facet_tags.find(clamped_tag)
-        n_clamped = mesh.comm.allreduce(len(clamped), op=MPI.SUM)
-        if n_clamped == 0:
-            raise InputError(f"the clamped boundary (tag {clamped_tag}) has no facets: meas(Γ1) > 0 "
-                             "is required")
-        zero = np.zeros(dim, dtype=np.float64)
-        dofs = fem.locate_dofs_topological(self.V, dim - 1, clamped)
-        self.bcs = [fem.dirichletbc(zero, dofs, self.V)]
+        parts = list(dirichlet)
+        if clamped_tag is not None:
+            clamped = facet_tags.find(clamped_tag)
+            if mesh.comm.allreduce(len(clamped), op=MPI.SUM) == 0:
+                raise InputError(f"the clamped boundary (tag {clamped_tag}) has no facets: "
+                                 "meas(Γ1) > 0 is required")
+            parts.insert(0, Dirichlet.clamped(clamped_tag, dim))
+        if not parts:
+            raise InputError("no Dirichlet part: meas(Γ1) > 0 is required (a clamped part, or "
+                             "prescribed displacements and symmetry planes that hold the body)")
+        self.dirichlet = DirichletParts(self.V, facet_tags, parts)
+        if not any(p.all_zero for p in parts):
+            self.dirichlet.check_rigid_motions()
+        self.bcs = self.dirichlet.bcs
 
         # Stress quadrature: exact for ε(v) of degree-p displacements paired with the stress.
         self.state = QuadratureState(self.u, degree=max(2 * (degree - 1), 1))
@@ -139,6 +159,8 @@ class QuasistaticProblem:
         for term in external:
             residual -= term
         self.equilibrium = residual  # (σ, ε(v)) - (f, v): reactions and contact forces
+        self._equilibrium_form = fem.form(residual)
+        self._equilibrium_vec = None
         defaults = {}
         if not law.linear_in_strain:
             # Stiff elastic (E ~ 1e8) against soft viscous (μ*/k) branches: full Newton steps
@@ -162,19 +184,28 @@ class QuasistaticProblem:
         # Only what is called for: a constitutive update linear in ε with no compliance term
         # has a Jacobian that changes with the step size only; it is factorized once per size.
         constant_jacobian = law.linear_in_strain and (contact is None or isinstance(contact, Signorini))
+        self.contact_dofs = None
+        self.contact_monitor = None
+        rotation = None
+        if isinstance(contact, Signorini):
+            self.contact_dofs = contact_dofs(self.V, facet_tags, contact,
+                                             exclude=self.dirichlet.prescribed,
+                                             rotate=rotate_contact)
+            if self.contact_dofs.rotated:
+                rotation = rotation_matrix(self.V, self.contact_dofs.frames)
         self.solver = StepSolver(residual, jacobian, self.u, self.bcs, self._update_stress,
                                  options, options_prefix, scale=scale,
                                  load=sum(external[1:], external[0]) if external else None,
                                  point_forces=self._point_forces if self._point_loads else None,
-                                 constant_jacobian=constant_jacobian)
-        self.contact_dofs = None
-        self.contact_monitor = None
+                                 constant_jacobian=constant_jacobian, rotation=rotation)
         if isinstance(contact, Signorini):
-            clamped_dofs = self.bcs[0].dof_indices()[0]
-            self.contact_dofs = contact_dofs(self.V, facet_tags, contact, exclude=clamped_dofs)
             self.solver.set_bounds(*variable_bounds(self.u, self.contact_dofs))
             self.contact_monitor = ContactMonitor(self.u, self.contact_dofs, self.equilibrium,
                                                   facet_tags, contact.tag)
+        self._contact_nodes = None
+        if contact is not None:
+            self._contact_nodes = _unrolled(self.V, fem.locate_dofs_topological(
+                self.V, dim - 1, facet_tags.find(contact.tag)), self.dirichlet.prescribed)
         self._contact_active = False  # after the last accepted step
         self.step_index = 0
         self.reports: list[StepReport] = []
@@ -233,7 +264,14 @@ class QuasistaticProblem:
         if self._bdf2 is not None:
             self.solver.dt = self._bdf2.prepare(self.state, dt)
         self.time.value = t_new
+        if self.dirichlet.moving:
+            self.dirichlet.update(t_new)
+            fem.petsc.set_bc(self.u.vector, self.bcs)
+            self.u.x.scatter_forward()
         try:
+            if isinstance(self.contact, Signorini) and self.contact.moving:
+                self.contact_dofs.gap = contact_gap(self.contact, self.contact_dofs, t_new)
+                self.solver.update_bounds(*variable_bounds(self.u, self.contact_dofs))
             # Signorini with a Jacobian that is factorized once: while nothing touches, a plain
             # Newton step with that factorization is tried first, and the VI (which factorizes
             # its reduced matrix every iteration) runs only when the result would penetrate.
@@ -295,6 +333,26 @@ class QuasistaticProblem:
         if not getattr(self, "_warned_unstable", False):
             warnings.warn(message, RuntimeWarning, stacklevel=3)
             self._warned_unstable = True
+
+    def support_forces(self) -> tuple[np.ndarray, np.ndarray]:
+        """(reactions, contact force) at the current state (collective): the force each Dirichlet
+        part exerts on the body, shape (parts, dim), and the total force of the foundation or
+        obstacle on Γ3, shape (dim,) (zero without contact), from the equilibrium residual
+        (σ, ε(v)) - (f, v) (see :mod:`vpcontact.solver.dirichlet`)."""
+        if self._equilibrium_vec is None:
+            self._equilibrium_vec = fem.petsc.create_vector(self._equilibrium_form)
+        vec = self._equilibrium_vec
+        with vec.localForm() as local:
+            local.set(0.0)
+        fem.petsc.assemble_vector(vec, self._equilibrium_form)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        values = vec.array
+        reactions = self.dirichlet.reactions(values)
+        dim = self.V.dofmap.index_map_bs
+        local = np.zeros(dim)
+        if self._contact_nodes is not None:
+            np.add.at(local, self._contact_nodes % dim, values[self._contact_nodes])
+        return reactions, self.mesh.comm.allreduce(local, op=MPI.SUM)
 
     def _point_forces(self):
         t = float(self.time.value)
@@ -396,6 +454,14 @@ class _PointDofs:
         if f.shape != (self.dim,):
             raise InputError(f"point load force must have {self.dim} components, got {f.shape[0]}")
         return f
+
+
+def _unrolled(V, blocks: np.ndarray, exclude: np.ndarray) -> np.ndarray:
+    """Owned unrolled dofs of the nodes ``blocks``, without those in ``exclude``."""
+    bs = V.dofmap.index_map_bs
+    blocks = blocks[blocks < V.dofmap.index_map.size_local]
+    dofs = (blocks[:, None] * bs + np.arange(bs)).ravel()
+    return dofs[~np.isin(dofs, exclude)].astype(np.int32)
 
 
 def _as_vector(expr, dim: int):

@@ -104,13 +104,17 @@ class StepSolver:
         constant_jacobian: the Jacobian depends on the step size only (a constitutive update
             linear in ε and no nonlinear contact term): it is assembled once per step size and
             the linear solver's factorization is reused across iterations and steps.
+        rotation: orthogonal R (laid out like u's PETSc vector) of a change of variables
+            u = R ũ: SNES then solves Rᵀ F(R ũ) = 0 with Jacobian Rᵀ J R (:meth:`Mat.PtAP`),
+            bounds apply to ũ (local frames at contact nodes, :mod:`vpcontact.model.frames`).
+            Dirichlet rows must be left alone by R. None: SNES works on u itself.
     """
 
     def __init__(self, residual, jacobian, u: fem.Function, bcs: Sequence[fem.DirichletBCMetaClass],
                  refresh: Callable[[], None], petsc_options: Optional[dict] = None,
                  options_prefix: Optional[str] = None, scale: float = 1.0, load=None,
                  point_forces: Optional[Callable[[], tuple]] = None,
-                 constant_jacobian: bool = False):
+                 constant_jacobian: bool = False, rotation: Optional[PETSc.Mat] = None):
         if not scale > 0:
             raise ValueError(f"scale must be > 0, got {scale}")
         self.scale = float(scale)
@@ -129,6 +133,14 @@ class StepSolver:
         self._jacobian_dt: Optional[float] = None  # step size of the assembled constant Jacobian
         self.dt = 0.0  # set by the owner before each solve (only the constant-Jacobian reuse reads it)
         self._A = fem_petsc.create_matrix(self._J)
+        self._R = rotation
+        self._b_phys = self._A_phys = None  # physical-frame residual and Jacobian (with R)
+        if rotation is not None:
+            self._b_phys = fem_petsc.create_vector(self._F)
+            self._A_phys = self._A
+            fem_petsc.assemble_matrix(self._A_phys, self._J, bcs=self.bcs)  # a pattern for PtAP
+            self._A_phys.assemble()
+            self._A = self._A_phys.PtAP(rotation)
         self._x = u.vector.duplicate()
         comm = u.function_space.mesh.comm
         self.prefix = options_prefix or f"vpcontact_step_{next(_counter)}_"
@@ -210,6 +222,15 @@ class StepSolver:
         self._setup(self._free_snes)
         _forget(free_prefix, {**self._options, "snes_type": 0, "snes_linesearch_type": 0})
 
+    def update_bounds(self, lower: PETSc.Vec, upper: PETSc.Vec) -> None:
+        """New values (physical units) for the bounds given to :meth:`set_bounds` (a moving
+        obstacle); the vectors passed are destroyed."""
+        for new, old in zip((lower, upper), self._bounds):
+            finite = np.abs(new.array) < PETSc.INFINITY
+            new.array[finite] /= self.scale
+            new.copy(old)
+            new.destroy()
+
     def _use_lagged_solver(self) -> None:
         """Reduced VI systems solved with a kept full-size preconditioner (vpcontact.solver.vi_linear)."""
         inner = {k[len("lagged_"):]: v for k, v in self._options.items()
@@ -219,7 +240,8 @@ class StepSolver:
             self.lagged_lu.lag_allowed = self._lag_allowed
         else:
             self.lagged_lu = LaggedMultigrid(self.snes, self._A, self.prefix + "lagged_",
-                                             rigid_body_modes(self.u.function_space), inner)
+                                             rigid_body_modes(self.u.function_space, self._R),
+                                             inner)
         ksp = self.snes.getKSP()
         ksp.setType("python")
         ksp.setPythonContext(self.lagged_lu)
@@ -275,7 +297,10 @@ class StepSolver:
             return
         start = _time.perf_counter()
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-        x.copy(self.u.vector)
+        if self._R is None:
+            x.copy(self.u.vector)
+        else:
+            self._R.mult(x, self.u.vector)
         if self.scale != 1.0:
             self.u.vector.scale(self.scale)
         self.u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
@@ -285,9 +310,10 @@ class StepSolver:
         self._loaded_valid = True
         self.timings["kernel"] += _time.perf_counter() - start
 
-    def _residual(self, snes, x, b) -> None:
+    def _residual(self, snes, x, b_snes) -> None:
         self._load_iterate(x)
         start = _time.perf_counter()
+        b = b_snes if self._R is None else self._b_phys
         with b.localForm() as b_local:
             b_local.set(0.0)
         fem_petsc.assemble_vector(b, self._F)
@@ -298,18 +324,23 @@ class StepSolver:
             dofs, values = self._point_forces()
             b.array[dofs] -= values
         fem_petsc.set_bc(b, self.bcs, u, -1.0)
+        if self._R is not None:
+            self._R.multTranspose(b, b_snes)
         self.timings["residual"] += _time.perf_counter() - start
 
-    def _jacobian(self, snes, x, A, P) -> None:
+    def _jacobian(self, snes, x, A_snes, P) -> None:
         if self.constant_jacobian and self._jacobian_dt == self.dt:
             return  # A unchanged: the preconditioner (factorization) is reused as it is
         self._load_iterate(x)
         start = _time.perf_counter()
+        A = A_snes if self._R is None else self._A_phys
         A.zeroEntries()
         fem_petsc.assemble_matrix(A, self._J, bcs=self.bcs)
         A.assemble()
         if self.scale != 1.0:
             A.scale(self.scale)  # d(residual)/dx = d(residual)/du * scale
+        if self._R is not None:
+            A.PtAP(self._R, result=A_snes)
         self._jacobian_dt = self.dt
         self.jacobian_assemblies += 1
         if self.constant_jacobian and self.lagged_lu is not None:
@@ -338,7 +369,10 @@ class StepSolver:
                 self._load_vec.array[dofs] += values
             fem_petsc.set_bc(self._load_vec, self.bcs, scale=0.0)
             self._force_scale = self._load_vec.norm()
-        self.u.vector.copy(self._x)
+        if self._R is None:
+            self.u.vector.copy(self._x)
+        else:
+            self._R.multTranspose(self.u.vector, self._x)
         if self.scale != 1.0:
             self._x.scale(1.0 / self.scale)
         self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
@@ -378,6 +412,7 @@ class StepSolver:
 
     def destroy(self) -> None:
         """Free the PETSc objects."""
-        for obj in (self.snes, self._free_snes, self._A, self._b, self._x, self._loaded, self._load_vec):
+        for obj in (self.snes, self._free_snes, self._A, self._b, self._x, self._loaded,
+                    self._load_vec, self._A_phys, self._b_phys):
             if obj is not None:
                 obj.destroy()

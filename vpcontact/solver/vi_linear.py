@@ -356,9 +356,10 @@ class LaggedMultigrid(_ReducedSolve):
         self._ready = True
 
 
-def rigid_body_modes(V) -> PETSc.NullSpace:
+def rigid_body_modes(V, rotation: Optional[PETSc.Mat] = None) -> PETSc.NullSpace:
     """Orthonormal rigid-body modes (translations and rotations) of a vector P_k space, in the
-    layout of its PETSc vectors (owned entries): GAMG's near null space for elasticity."""
+    layout of its PETSc vectors (owned entries): GAMG's near null space for elasticity. With
+    ``rotation`` R (unknowns ũ = Rᵀu in local frames), the modes are written in those frames."""
     bs = V.dofmap.index_map_bs
     owned = V.dofmap.index_map.size_local
     x = V.tabulate_dof_coordinates()[:owned]
@@ -374,6 +375,10 @@ def rigid_body_modes(V) -> PETSc.NullSpace:
     for field in fields:
         vec = PETSc.Vec().createMPI((owned * bs, None), comm=comm)
         vec.array[:] = field.ravel()
+        if rotation is not None:
+            physical = vec.copy()
+            rotation.multTranspose(physical, vec)
+            physical.destroy()
         vectors.append(vec)
     for i, vec in enumerate(vectors):
         for prev in vectors[:i]:
