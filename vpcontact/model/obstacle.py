@@ -84,7 +84,8 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
             i = int(np.argmax(open_ & (s > max_distance)))
             raise InputError(f"the ray from contact point {points[i].tolist()} along the normal "
                              f"{normal[i].round(12).tolist()} misses the obstacle within "
-                             f"{max_distance:g}")
+                             f"{max_distance:g} (restrict the contact part to where the "
+                             "obstacle lies along the normal, or raise contact.max_distance)")
         s = np.where(open_, 2.0 * s, s)
 
     # Bisection on [lo, hi] with φ(lo) > 0 ≥ φ(hi): 64 halvings reach machine precision.

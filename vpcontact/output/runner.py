@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Optional
 
 from vpcontact.output.fields import CellStress, ContactHistory, XdmfSeries
+from vpcontact.output.forces import ForceHistory
 from vpcontact.solver.problem import QuasistaticProblem
 from vpcontact.model.signorini import ContactReport
 from vpcontact.solver.stepping import StepControl, advance
@@ -44,7 +45,8 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         max_cuts: int = 12, history: Optional[ContactHistory] = None,
         tolerance: Optional[float] = None,
         csv_name: str = "contact_history.csv", progress=None, xdmf_every: int = 1,
-        xdmf_extra=()) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
+        xdmf_extra=(), forces: Optional[ForceHistory] = None
+        ) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
     """Advance ``problem`` to ``t_final`` with steps of at most ``dt``, writing outputs into ``out``.
 
     A step that does not converge is rejected and retried with half the step, at most
@@ -54,7 +56,8 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     ``history`` records the contact nodes (default: a Signorini problem's); ``progress(step,
     report)`` is called after every accepted step on every rank; the XDMF series gets every
     ``xdmf_every``-th step and the last one, with the fields ``xdmf_extra`` ((Function, refresh)
-pairs) besides u, stress and von Mises norm.
+    pairs) besides u, stress and von Mises norm. ``forces`` records the support reactions and
+    the contact force at every step (``reactions.csv``).
 
     Returns the run record, the contact history (Signorini problems) and the cell stress fields.
     """
@@ -75,6 +78,8 @@ pairs) besides u, stress and von Mises norm.
         history = ContactHistory(problem)
     if history is not None:
         history.record(0.0)
+    if forces is not None:
+        forces.record(0.0)
     try:
         for step in advance(problem, t_final, control):
             record.times.append(step.time)
@@ -88,6 +93,8 @@ pairs) besides u, stress and von Mises norm.
             with _timed(record):
                 if history is not None:
                     history.record(step.time)
+                if forces is not None:
+                    forces.record(step.time)
                 if series is not None and (step.step % xdmf_every == 0 or last):
                     series.write(step.time)
             if progress is not None:
@@ -106,6 +113,8 @@ pairs) besides u, stress and von Mises norm.
         with _timed(record):
             if out is not None and history is not None:
                 history.write_csv(Path(out) / csv_name)
+            if out is not None and forces is not None:
+                forces.write_csv(Path(out) / "reactions.csv")
         record.wall_time = _time.perf_counter() - start
     return record, history, cells
 

@@ -3,7 +3,9 @@
 
 Into the output folder: the XDMF series (u, stress, von Mises norm; if ``[output] xdmf``),
 ``contact.csv`` (per contact node and step: u_ν, gap, pressure; if ``[output] contact_csv``),
-PNG figures of the final state and of the contact history (if ``[output] figures``) and always
+``reactions.csv`` (per step: the reaction of each Dirichlet part and the contact force; always),
+PNG figures of the final state, the contact history and the forces (if ``[output] figures``)
+and always
 ``summary.json``: versions, scene hash, steps, Newton iterations, rejected steps with their
 converged reasons, wall-time split and active-set sizes. A run that fails after its budget of
 step halvings keeps the completed steps and is marked ``"completed": false``.
@@ -25,6 +27,7 @@ from mpi4py import MPI
 from vpcontact.model.signorini import Signorini, contact_dofs
 from vpcontact.output import plots, runner
 from vpcontact.output.fields import ContactHistory
+from vpcontact.output.forces import ForceHistory
 from vpcontact.scene.builder import Model, obstacle_level_set
 from vpcontact.solver.step_solver import time_split
 
@@ -43,6 +46,7 @@ class Session:
         """Simulate; return the exit status (0 completed, 1 failed with outputs kept)."""
         scene, problem = self.model.scene, self.model.problem
         history = self._history()
+        self.forces = ForceHistory(problem)
         start = time.perf_counter()
         record = None
         error: Optional[Exception] = None
@@ -52,7 +56,8 @@ class Session:
                 xdmf=scene.output.xdmf, verbose=False, max_cuts=scene.time.max_cuts,
                 tolerance=scene.time.tolerance,
                 history=history, csv_name="contact.csv", progress=self._progress,
-                xdmf_every=scene.output.every, xdmf_extra=self._pressure_field(history))
+                xdmf_every=scene.output.every, xdmf_extra=self._pressure_field(history),
+                forces=self.forces)
         except Exception as err:  # re-raised below once the summary is on disk
             error = err
         if self._bar is not None:
@@ -122,6 +127,8 @@ class Session:
         if scene.dim >= 2:
             plots.deformed_configuration(self.out / "final_state.png", problem.u, cells.von_mises,
                                          f"{scene.name}: von Mises norm at t = {scene.time.T:g}")
+        self.forces.plot(self.out / "reactions.png",
+                         f"{scene.name}: support reactions and contact force")
         if history is not None and scene.dim >= 2:
             axis = 0
             line = (1, 0.5 * sum(_bounds(problem, 1))) if scene.dim == 3 else None
@@ -146,6 +153,7 @@ class Session:
             "rejected_steps": [] if record is None else [
                 {"time": c.time, "dt": c.dt, "reason": c.reason} for c in record.cuts],
             "active_contact_nodes": [] if record is None else [c.active for c in record.contact],
+            "reactions": self.forces.summary(),
             "wall_time_s": wall,
             "wall_time_split_s": {**time_split(solver.timings),
                                   "output": 0.0 if record is None else record.output_time},

@@ -6,6 +6,8 @@ gives the state (u, σ, ε at quadrature points) step after step:
 
 * :mod:`.problem`: :class:`QuasistaticProblem`, the paper's Problems 2 and 4 (Euler, or BDF2 for
   the constitutive law), with :class:`Loads` and :func:`tag_facets`;
+* :mod:`.dirichlet`: clamped, prescribed-displacement and symmetry parts (:class:`Dirichlet`),
+  the rigid-motion check and the support reactions;
 * :mod:`.step_solver`: :class:`StepSolver`, one step as a PETSc SNES solve (VI mode for
   Signorini), converged reasons checked after every solve;
 * :mod:`.vi_linear`: the linear solves inside SNES VI, with factorizations that outlive the
@@ -14,6 +16,7 @@ gives the state (u, σ, ε at quadrature points) step after step:
   :mod:`.error_estimate`) and :func:`advance`, the time loop as a generator of accepted steps.
 """
 
+from vpcontact.solver.dirichlet import Dirichlet, DirichletParts
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor
 from vpcontact.solver.problem import Loads, PointLoad, QuasistaticProblem, StepReport, tag_facets
 from vpcontact.solver.step_solver import DEFAULT_OPTIONS, StepSolver, reason_name, time_split
@@ -21,7 +24,7 @@ from vpcontact.solver.stepping import Cut, StepControl, advance
 from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
                                         rigid_body_modes)
 
-__all__ = ["DEFAULT_OPTIONS", "Cut", "LaggedDirectSolve", "LaggedMultigrid", "Loads", "PointLoad",
+__all__ = ["DEFAULT_OPTIONS", "Cut", "Dirichlet", "DirichletParts", "LaggedDirectSolve", "LaggedMultigrid", "Loads", "PointLoad",
            "QuasistaticProblem", "StepControl", "StepReport", "StepSolver", "advance",
            "extrapolation_weights", "milne_factor", "options_in_database", "reason_name",
            "rigid_body_modes", "tag_facets", "time_split"]

@@ -129,6 +129,20 @@ class DirichletParts:
         for component in self._components:
             component.update(t)
 
+    def mean_moving_value(self) -> Optional[float]:
+        """Mean |u_D| over the dofs of the first time-dependent component (collective), or None
+        without one."""
+        moving = [c for c in self._components if c.moving]
+        if not moving:
+            return None
+        c = moving[0]
+        owned = c.space.dofmap.index_map.size_local
+        values = c.function.x.array[c.dofs[1][c.dofs[1] < owned]]
+        comm = self.V.mesh.comm
+        total = comm.allreduce(float(np.sum(np.abs(values))), op=MPI.SUM)
+        count = comm.allreduce(len(values), op=MPI.SUM)
+        return total / max(count, 1)
+
     def reactions(self, residual: np.ndarray) -> np.ndarray:
         """(parts, dim) support forces from the assembled residual's owned entries, summed over
         ranks (collective)."""
@@ -153,8 +167,8 @@ class DirichletParts:
         owned = V.dofmap.index_map.size_local * dim
         dofs = self.prescribed[self.prescribed < owned]
         x = V.tabulate_dof_coordinates()[dofs // dim]
-        lo = comm.allreduce(mesh.geometry.x.min(axis=0), op=MPI.MIN)
-        hi = comm.allreduce(mesh.geometry.x.max(axis=0), op=MPI.MAX)
+        lo = np.min(comm.allgather(mesh.geometry.x.min(axis=0)), axis=0)
+        hi = np.max(comm.allgather(mesh.geometry.x.max(axis=0)), axis=0)
         size = max(float(np.max(hi - lo)), np.finfo(float).tiny)
         x = (x - 0.5 * (lo + hi)) / size
         values = np.stack([m(x)[np.arange(len(dofs)), dofs % dim] for m in modes], axis=1)

@@ -354,6 +354,16 @@ class QuasistaticProblem:
             np.add.at(local, self._contact_nodes % dim, values[self._contact_nodes])
         return reactions, self.mesh.comm.allreduce(local, op=MPI.SUM)
 
+    def driving_displacement(self) -> Optional[float]:
+        """The size of what drives a displacement-controlled run at the current time: |d(t)| of
+        a moving obstacle's translation, else the mean |u_D| over the first time-dependent
+        prescribed component (collective); None when nothing moves."""
+        contact = self.contact
+        t = float(self.time.value)
+        if isinstance(contact, Signorini) and contact.translation is not None:
+            return float(np.linalg.norm(contact.translation(t)))
+        return self.dirichlet.mean_moving_value()
+
     def _point_forces(self):
         t = float(self.time.value)
         dofs = [p.dofs for p in self._point_loads]
