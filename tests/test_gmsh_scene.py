@@ -18,7 +18,7 @@ LEFT, RIGHT, BOTTOM, BODY = 1, 2, 3, 10
 def _rectangle_msh(path):
     """A 2 × 1 rectangle meshed by Gmsh; physical lines 1 (x = 0), 2 (x = 2), 3 (y = 0)."""
     if MPI.COMM_WORLD.rank == 0:
-        gmsh.initialize(["-v", "0"])
+        gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
         gmsh.model.add("rectangle")
         surface = gmsh.model.occ.addRectangle(0.0, 0.0, 0.0, 2.0, 1.0)
         gmsh.model.occ.synchronize()

@@ -30,9 +30,9 @@ from vpcontact.errors import (ConvergenceError, InputError, NonFiniteStateError,
 
 
 def main(argv: Optional[list] = None) -> int:
-    logging.getLogger().setLevel(logging.WARNING)  # the form compiler logs at INFO
     parser = _parser()
     args = parser.parse_args(argv)
+    _logging(getattr(args, "verbose", False))
     if args.command is None:
         parser.print_help()
         return 2
@@ -48,10 +48,25 @@ def main(argv: Optional[list] = None) -> int:
         return 2
 
 
+def _logging(verbose: bool) -> None:
+    """Keep the form compiler's JIT messages (logged at INFO on a fresh machine) off the terminal
+    unless ``-v``. distutils resets the root logger's level to INFO at every JIT build, so the
+    level is set on the root handler, which nothing else touches."""
+    logging.basicConfig()  # the root handler (FFCx's own basicConfig() is then a no-op)
+    level = logging.INFO if verbose else logging.WARNING
+    for handler in logging.getLogger().handlers:
+        handler.setLevel(level)
+    logging.getLogger().setLevel(level)
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="vpcontact", description=__doc__.splitlines()[0])
+    verbose = argparse.ArgumentParser(add_help=False)
+    verbose.add_argument("-v", "--verbose", action="store_true",
+                         help="also show the form compiler's messages (JIT builds)")
     sub = parser.add_subparsers(dest="command")
-    run = sub.add_parser("run", help="simulate a scene (default: the paper's 2-D Signorini test)")
+    run = sub.add_parser("run", parents=[verbose],
+                         help="simulate a scene (default: the paper's 2-D Signorini test)")
     run.add_argument("scene", nargs="?", default=None, help="bundled scene name or TOML file")
     run.add_argument("--out", help="output folder (default: output/<scene name>)")
     run.add_argument("--petsc-options", nargs="+", default=[], metavar="KEY=VALUE",
@@ -60,13 +75,14 @@ def _parser() -> argparse.ArgumentParser:
     run.set_defaults(func=_run)
     for name, func, text in (("validate", _validate, "check a scene without running it"),
                              ("show", _show, "print the scene with all defaults filled in")):
-        p = sub.add_parser(name, help=text)
+        p = sub.add_parser(name, help=text, parents=[verbose])
         p.add_argument("scene", help="bundled scene name or TOML file")
         p.set_defaults(func=func)
     sub.add_parser("list", help="list the bundled scenes").set_defaults(func=_list)
     study = sub.add_parser("study", help="convergence and work-precision studies of a scene")
     kinds = study.add_subparsers(dest="study")
-    conv = kinds.add_parser("convergence", help="error against h, k or both; observed orders")
+    conv = kinds.add_parser("convergence", parents=[verbose],
+                            help="error against h, k or both; observed orders")
     conv.add_argument("--refine", choices=("both", "h", "k"), default="both",
                       help="what to halve at each level (default: both, the paper's h = k path)")
     conv.add_argument("--levels", type=int, default=4, help="number of refinements (default 4)")
@@ -75,7 +91,8 @@ def _parser() -> argparse.ArgumentParser:
                       help="Euler scheme of the law (default: the scene's)")
     conv.add_argument("--time-scheme", choices=("euler", "bdf2"), default="euler")
     conv.set_defaults(func=_study_convergence)
-    cost = kinds.add_parser("cost", help="work-precision: error against wall time, Pareto front")
+    cost = kinds.add_parser("cost", parents=[verbose],
+                            help="work-precision: error against wall time, Pareto front")
     cost.add_argument("--levels", type=int, default=3,
                       help="h and k levels each (levels² runs per method; default 3)")
     cost.add_argument("--degrees", type=int, nargs="+", choices=(1, 2), default=None)

@@ -57,6 +57,9 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
     n = points.shape[0]
     lo = np.zeros(n)
     f_lo = f(lo)
+    # A point on the obstacle's surface up to round-off (|φ| ≤ 1e-12 (1 + |x|)) touches it.
+    touching = np.abs(f_lo) <= 1e-12 * (1.0 + np.abs(points).max(axis=1))
+    f_lo = np.where(touching, 0.0, f_lo)
     inside = f_lo < 0
     if signed and inside.any():
         gap = np.empty(n)

@@ -104,7 +104,7 @@ def _read_gmsh(scene: Scene, comm):
     from dolfinx.io import gmshio
     problem = None
     if comm.rank == 0:
-        gmsh.initialize(["-v", "0"])
+        gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
         try:
             gmsh.model.add("scene")
             gmsh.merge(str(scene.mesh.file))
