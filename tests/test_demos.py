@@ -66,3 +66,20 @@ def test_signorini_2d_demo(shared_tmp_path, monkeypatch):
     for name in ("signorini_2d.xdmf", "signorini_2d.h5", "fig1_deformed.png",
                  "fig2_contact_evolution.png", "contact_history.csv"):
         assert (out / name).stat().st_size > 1000, name
+
+
+def test_indentation_relaxation_demo(shared_tmp_path, monkeypatch):
+    monkeypatch.setenv("CI", "1")
+    demo = _load("indentation_relaxation")
+    out = shared_tmp_path / "relax"
+    session = demo.run(out)
+    MPI.COMM_WORLD.barrier()
+    force = [-c[1] for c in session.forces.contact]
+    peak = max(force)
+    ramp_end = session.forces.times.index(min(session.forces.times, key=lambda t: abs(t - 0.25)))
+    assert force[0] == 0 and abs(force.index(peak) - ramp_end) <= 1  # rises while pushed
+    assert all(b < a for a, b in zip(force[ramp_end + 1:], force[ramp_end + 2:]))  # relaxes
+    assert force[-1] < 0.9 * peak
+    for name in ("indentation_relaxation.xdmf", "contact.csv", "reactions.csv", "summary.json",
+                 "reactions.png", "relaxation.png", "final_state.png"):
+        assert (out / name).stat().st_size > 500, name

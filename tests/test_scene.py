@@ -110,7 +110,7 @@ def problem_at(err: SceneError, needle: str):
 
 # -- bundled scenes ---------------------------------------------------------------------------
 
-EXPECTED = {"elastic_2d", "normal_compliance_1d", "normal_compliance_2d", "normal_compliance_3d",
+EXPECTED = {"elastic_2d", "indentation_relaxation", "normal_compliance_1d", "normal_compliance_2d", "normal_compliance_3d",
             "signorini_2d", "signorini_3d"}
 
 

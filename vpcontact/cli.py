@@ -1,9 +1,10 @@
 # SPDX-License-Identifier: MIT
 """Command line: ``python3 -m vpcontact run|validate|list|show`` (also the ``vpcontact`` script).
 
-* ``run [SCENE] [--out DIR] [--petsc-options KEY=VALUE ...]``: simulate a scene (default: the
-  paper's 2-D Signorini test) and write into DIR the XDMF series, ``contact.csv``,
-  ``summary.json`` and PNG figures the scene asks for.
+* ``run [SCENE] [--out DIR] [--petsc-options KEY=VALUE ...] [-v]``: simulate a scene (default:
+  ``indentation_relaxation``, a cylinder pushed into a viscoplastic block) and write into DIR
+  the XDMF series, ``contact.csv``, ``reactions.csv``, ``summary.json`` and PNG figures the
+  scene asks for. ``-v`` also shows the form compiler's messages.
 * ``validate SCENE``: check a scene without running it (the mesh-dependent checks included).
 * ``list``: the bundled scenes. ``show SCENE``: the scene with every default filled in.
 * ``study convergence SCENE``: error against h, k or both, observed orders and error constants;
@@ -66,7 +67,7 @@ def _parser() -> argparse.ArgumentParser:
                          help="also show the form compiler's messages (JIT builds)")
     sub = parser.add_subparsers(dest="command")
     run = sub.add_parser("run", parents=[verbose],
-                         help="simulate a scene (default: the paper's 2-D Signorini test)")
+                         help="simulate a scene (default: indentation_relaxation)")
     run.add_argument("scene", nargs="?", default=None, help="bundled scene name or TOML file")
     run.add_argument("--out", help="output folder (default: output/<scene name>)")
     run.add_argument("--petsc-options", nargs="+", default=[], metavar="KEY=VALUE",

@@ -209,6 +209,9 @@ def contact_gap(contact: Signorini, cd: ContactDofs, time: float = 0.0) -> np.nd
     # A moving obstacle may move into the reference configuration (g < 0 later on), but the
     # initial state must be admissible.
     bad = np.flatnonzero(~np.isfinite(gap) | ((gap < 0) & (not contact.moving or time == 0.0)))
+    if len(bad) and contact.obstacle is not None:
+        raise InputError(f"contact point {points[bad[0]].round(12).tolist()} starts inside the "
+                         f"obstacle at t = {time:g} (gap {gap[bad[0]]:.6g})")
     if len(bad):
         raise InputError(f"the Signorini gap must be finite and >= 0 at every contact point; it is "
                          f"{gap[bad[0]]:.6g} at {points[bad[0]].round(12).tolist()}")

@@ -52,7 +52,7 @@ __all__ = ["DEFAULT_SCENE", "MAX_BYTES", "BoundaryPart", "BoxSelector", "Contact
            "TimeSpec", "bundled", "load", "loads_text", "resolve"]
 
 #: The scene used when none is named.
-DEFAULT_SCENE = "signorini_2d"
+DEFAULT_SCENE = "indentation_relaxation"
 #: Largest scene file accepted, in bytes.
 MAX_BYTES = 1_000_000
 SCENES_DIR = Path(__file__).parent / "bundled"

@@ -1,0 +1,190 @@
+# SPDX-License-Identifier: MIT
+"""Scene keys for posing contact problems: prescribed displacements (with free components),
+symmetry planes, built-in and moving obstacles; their outputs (reactions.csv, reactions.png,
+summary.json) and their located errors (exit 2, nothing written)."""
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from vpcontact import cli
+
+COMPRESSION = """\
+name = "compression"
+
+[mesh]
+type = "rectangle"
+lower = [0.0, 0.0]
+upper = [2.0, 1.0]
+cells = [8, 4]
+
+[boundary.bottom]
+kind = "symmetry"
+plane = { axis = "y", value = 0.0 }
+
+[boundary.left]
+kind = "symmetry"
+plane = { axis = "x", value = 0.0 }
+
+[boundary.top]
+kind = "displacement"
+plane = { axis = "y", value = 1.0 }
+displacement = ["free", "-0.01*t"]
+
+[material]
+E = 100.0
+nu = 0.3
+
+[time]
+T = 1.0
+k = 0.5
+"""
+
+INDENTATION = """\
+name = "indentation"
+
+[mesh]
+type = "rectangle"
+lower = [-1.0, -1.0]
+upper = [1.0, 0.0]
+cells = [32, 16]
+
+[boundary.bottom]
+kind = "clamped"
+plane = { axis = "y", value = -1.0 }
+
+[boundary.top]
+kind = "contact"
+box = { lower = [-0.4, 0.0], upper = [0.4, 0.0] }
+
+[material]
+E = 1000.0
+nu = 0.3
+plane = "strain"
+
+[contact]
+type = "signorini"
+boundary = "top"
+obstacle = { shape = "cylinder", center = [0.0, 0.5], radius = 0.5 }
+motion = [0, "-0.02*t"]
+
+[time]
+T = 1.0
+k = 0.25
+"""
+
+
+def _write(path: Path, text: str) -> Path:
+    MPI.COMM_WORLD.barrier()
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text)
+    MPI.COMM_WORLD.barrier()
+    return path
+
+
+def _csv(path: Path):
+    header = path.read_text().splitlines()[0].split(",")
+    return header, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+
+
+def test_rollers_and_prescribed_displacement_from_a_scene(shared_tmp_path):
+    scene = _write(shared_tmp_path / "compression.toml", COMPRESSION)
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    header, rows = _csv(out / "reactions.csv")
+    assert header == ["t", "displacement", "bottom_x", "bottom_y", "left_x", "left_y", "top_x",
+                      "top_y", "contact_x", "contact_y"]
+    top = rows[:, header.index("top_y")]
+    expected = -100.0 * 0.01 * rows[:, 0] * 2.0  # -E ε(t) W
+    assert np.allclose(top, expected, rtol=1e-9, atol=1e-12)
+    assert np.allclose(rows[:, header.index("displacement")], 0.01 * rows[:, 0])
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["reactions"]["parts"] == ["bottom", "left", "top"]
+    assert summary["reactions"]["final"]["bottom"][1] == pytest.approx(2.0, rel=1e-9)
+    assert (out / "reactions.png").is_file()
+
+
+def test_moving_cylinder_indents_a_block_from_a_scene(shared_tmp_path):
+    scene = _write(shared_tmp_path / "indentation.toml", INDENTATION)
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    header, rows = _csv(out / "reactions.csv")
+    force = -rows[:, header.index("contact_y")]
+    depth = rows[:, header.index("displacement")]
+    assert np.allclose(depth, 0.02 * rows[:, 0])
+    assert force[0] == 0.0 and np.all(np.diff(force) > 0), force
+    # reactions balance the contact force (no other load)
+    assert np.allclose(rows[:, header.index("bottom_y")], force, rtol=1e-8, atol=1e-10)
+    contact = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
+    centre = contact[np.isclose(contact[:, 1], 0.0)]  # t, x, y, z, u_normal, gap, pressure
+    assert np.allclose(centre[:, 5], -0.02 * centre[:, 0], atol=1e-12)  # the gap follows d(t)
+    assert np.all(centre[:, 4] <= centre[:, 5] + 1e-12)  # u_ν ≤ g
+
+
+@pytest.mark.parametrize("old, new, match", [
+    ('displacement = ["free", "-0.01*t"]', 'displacement = ["free", "free"]',
+     r"boundary\.top\.displacement: every component is 'free'"),
+    ('displacement = ["free", "-0.01*t"]', 'displacement = ["free"]',
+     r"boundary\.top\.displacement: expected 2 components, got 1"),
+    ('displacement = ["free", "-0.01*t"]', 'displacement = ["free", "-0.01*s"]',
+     r"boundary\.top\.displacement\[1\]: invalid expression"),
+    ('[boundary.left]\nkind = "symmetry"', '[boundary.left]\nkind = "traction"',
+     r"boundary: the Dirichlet parts do not hold the body: the rigid motion.*translation along x"),
+    ('[boundary.bottom]\nkind = "symmetry"\nplane = { axis = "y", value = 0.0 }',
+     '[boundary.bottom]\nkind = "symmetry"\nwhere = "x[1] < 1e-9 or x[0] > 2 - 1e-9"',
+     r"boundary\.bottom: symmetry part 'bottom' must be a plane with an axis-aligned normal"),
+])
+def test_bad_dirichlet_parts_are_located(shared_tmp_path, capsys, old, new, match):
+    assert old in COMPRESSION
+    scene = _write(shared_tmp_path / "bad.toml", COMPRESSION.replace(old, new))
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert "bad.toml:" in err
+        assert re.search(match, err), err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("old, new, match", [
+    ('shape = "cylinder"', 'shape = "cone"', r"contact\.obstacle\.shape: must be one of"),
+    ("radius = 0.5 }", "radius = -0.5 }", r"contact\.obstacle\.radius: must be > 0"),
+    ("radius = 0.5 }", "radius = 0.5, axis = [0, 1] }",
+     r"contact\.obstacle\.axis: not allowed: a cylinder's axis is the z axis in 2-D"),
+    ("radius = 0.5 }", "radius = 0.5, normal = [0, 1] }",
+     r"contact\.obstacle\.normal: not a parameter of shape 'cylinder'"),
+    ('motion = [0, "-0.02*t"]', 'motion = ["-0.02*t"]', r"contact\.motion: expected 2 components"),
+    ('motion = [0, "-0.02*t"]', 'motion = [0, "x[0]"]', r"contact\.motion\[1\]: invalid expression"),
+    ('box = { lower = [-0.4, 0.0], upper = [0.4, 0.0] }', 'plane = { axis = "y", value = 0.0 }',
+     r"contact\.obstacle: the ray from contact point .* misses the obstacle .*restrict the "
+     r"contact part"),
+    ('center = [0.0, 0.5]', 'center = [0.0, 0.3]',
+     r"contact\.obstacle: contact point .* starts inside the obstacle"),
+])
+def test_bad_obstacles_are_located(shared_tmp_path, capsys, old, new, match):
+    assert old in INDENTATION
+    scene = _write(shared_tmp_path / "bad.toml", INDENTATION.replace(old, new))
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert re.search(match, err), err
+    assert not out.exists()
+
+
+def test_show_writes_the_new_keys_back(shared_tmp_path, capsys):
+    scene = _write(shared_tmp_path / "indentation.toml", INDENTATION)
+    assert cli.main(["show", str(scene)]) == 0
+    text = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:
+        assert 'obstacle = { shape = "cylinder", center = [0.0, 0.5], radius = 0.5 }' in text
+        assert 'motion = [0.0, "-0.02*t"]' in text or "motion = [0, " in text
+    scene = _write(shared_tmp_path / "compression.toml", COMPRESSION)
+    assert cli.main(["show", str(scene)]) == 0
+    text = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:
+        assert 'displacement = ["free", "-0.01*t"]' in text
