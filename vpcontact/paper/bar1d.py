@@ -21,7 +21,8 @@ from mpi4py import MPI
 from vpcontact.model.constitutive import Elasticity, LinearRate
 from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.output.fields import CellStress
-from vpcontact.solver.problem import Loads, QuasistaticProblem, tag_facets
+from vpcontact.solver.loads import Loads, tag_facets
+from vpcontact.solver.problem import QuasistaticProblem
 
 T_FINAL = 10.0
 GAP = 0.25

@@ -25,7 +25,8 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from vpcontact.model.constitutive import Elasticity, Perzyna
-from vpcontact.solver.problem import Loads, QuasistaticProblem, tag_facets
+from vpcontact.solver.loads import Loads, tag_facets
+from vpcontact.solver.problem import QuasistaticProblem
 from vpcontact.model.signorini import Signorini
 
 YOUNG = 1e8

@@ -23,7 +23,8 @@ from mpi4py import MPI
 from vpcontact.model.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
 from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.errors import InputError
-from vpcontact.solver.problem import Loads, PointLoad, QuasistaticProblem
+from vpcontact.solver.loads import Loads, PointLoad
+from vpcontact.solver.problem import QuasistaticProblem
 from vpcontact.scene.files import Scene
 from vpcontact.scene.specs import ObstacleShape
 from vpcontact.model.obstacle import shape_level_set

@@ -5,7 +5,7 @@ Takes a mesh, a law and contact condition from :mod:`vpcontact.model`, loads and
 gives the state (u, σ, ε at quadrature points) step after step:
 
 * :mod:`.problem`: :class:`QuasistaticProblem`, the paper's Problems 2 and 4 (Euler, or BDF2 for
-  the constitutive law), with :class:`Loads` and :func:`tag_facets`;
+  the constitutive law, :mod:`.bdf2`), with :class:`Loads` and :func:`tag_facets` (:mod:`.loads`);
 * :mod:`.dirichlet`: clamped, prescribed-displacement and symmetry parts (:class:`Dirichlet`),
   the rigid-motion check and the support reactions;
 * :mod:`.step_solver`: :class:`StepSolver`, one step as a PETSc SNES solve (VI mode for
@@ -18,7 +18,8 @@ gives the state (u, σ, ε at quadrature points) step after step:
 
 from vpcontact.solver.dirichlet import Dirichlet, DirichletParts
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor
-from vpcontact.solver.problem import Loads, PointLoad, QuasistaticProblem, StepReport, tag_facets
+from vpcontact.solver.loads import Loads, PointLoad, tag_facets
+from vpcontact.solver.problem import QuasistaticProblem, StepReport
 from vpcontact.solver.step_solver import DEFAULT_OPTIONS, StepSolver, reason_name, time_split
 from vpcontact.solver.stepping import Cut, StepControl, advance
 from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,

@@ -14,12 +14,12 @@ current Newton iterate; the Jacobian uses their consistent tangent dσ_n/dε_n.
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
-from typing import Callable, Dict, List, Optional, Sequence
+from dataclasses import dataclass
+from typing import Callable, Optional, Sequence
 
 import numpy as np
 import ufl
-from dolfinx import fem, mesh as dmesh
+from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401  (fem.petsc)
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -32,12 +32,10 @@ from vpcontact.model.quadrature import QuadratureState
 from vpcontact.model.frames import rotation_matrix
 from vpcontact.model.signorini import (ContactMonitor, Signorini, contact_dofs, contact_gap,
                                        variable_bounds)
+from vpcontact.solver.bdf2 import Bdf2, check_time_scheme
 from vpcontact.solver.dirichlet import Dirichlet, DirichletParts
+from vpcontact.solver.loads import Loads, PointDofs, as_vector
 from vpcontact.model.tensors import as_mandel_matrix, as_mandel_vector, mandel_strain
-
-#: A load is a function (x, t) -> UFL expression, x the spatial coordinate, t a time Constant.
-Load = Callable[[ufl.SpatialCoordinate, fem.Constant], ufl.core.expr.Expr]
-
 
 @dataclass
 class StepReport:
@@ -49,23 +47,6 @@ class StepReport:
     reason: str = ""  # SNES converged reason, e.g. CONVERGED_FNORM_RELATIVE
     error_ratio: Optional[float] = None  # local error estimate / tolerance (when one was asked)
     order: int = 1                       # order of the estimate's scheme (1 Euler, 2 BDF2)
-
-
-@dataclass(frozen=True)
-class PointLoad:
-    """A concentrated force F(t) [N] at a mesh vertex ``at``."""
-
-    at: Sequence[float]
-    force: Callable[[float], Sequence[float]]
-
-
-@dataclass
-class Loads:
-    """Body force f_0, surface tractions f_2 (by facet tag) and point loads."""
-
-    body_force: Optional[Load] = None
-    tractions: Dict[int, Load] = field(default_factory=dict)
-    points: List[PointLoad] = field(default_factory=list)
 
 
 class QuasistaticProblem:
@@ -94,7 +75,7 @@ class QuasistaticProblem:
             "warn" warns once and takes it.
         time_scheme: "euler" (the paper's: implicit or explicit Euler, as the law says) or
             "bdf2" (second-order backward differentiation of the law, for implicit laws; the
-            first step is implicit Euler; see :class:`_Bdf2`).
+            first step is implicit Euler; see :class:`~vpcontact.solver.bdf2.Bdf2`).
         rotate_contact: Signorini only. None: local frames at the contact nodes where Γ3 is not
             an axis-aligned plane, plain dofs where it is; True: local frames always (identity
             frames on an axis-aligned Γ3, to test one path against the other).
@@ -111,8 +92,8 @@ class QuasistaticProblem:
         if unstable_steps not in ("error", "warn"):
             raise InputError(f"unstable_steps must be 'error' or 'warn', got {unstable_steps!r}")
         self.unstable_steps = unstable_steps
-        self.time_scheme = _check_time_scheme(time_scheme, law)
-        self._bdf2 = _Bdf2(law) if time_scheme == "bdf2" else None
+        self.time_scheme = check_time_scheme(time_scheme, law)
+        self._bdf2 = Bdf2(law) if time_scheme == "bdf2" else None
         self.predictor = predictor
         self.mesh = mesh
         self.law = law
@@ -153,9 +134,9 @@ class QuasistaticProblem:
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
         external = []  # (f, v): the applied loads, whose size sets the residual's force scale
         if loads.body_force is not None:
-            external.append(ufl.dot(_as_vector(loads.body_force(x, self.time), dim), v) * ufl.dx)
+            external.append(ufl.dot(as_vector(loads.body_force(x, self.time), dim), v) * ufl.dx)
         for tag, traction in loads.tractions.items():
-            external.append(ufl.dot(_as_vector(traction(x, self.time), dim), v) * ds(tag))
+            external.append(ufl.dot(as_vector(traction(x, self.time), dim), v) * ds(tag))
         for term in external:
             residual -= term
         self.equilibrium = residual  # (σ, ε(v)) - (f, v): reactions and contact forces
@@ -180,7 +161,7 @@ class QuasistaticProblem:
         # Unknown scale for SNES: an exact power of two far below any displacement of interest.
         extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
         scale = 2.0 ** (np.floor(np.log2(extent)) - 40)
-        self._point_loads = [_PointDofs(self.V, p) for p in loads.points]
+        self._point_loads = [PointDofs(self.V, p) for p in loads.points]
         # Only what is called for: a constitutive update linear in ε with no compliance term
         # has a Jacobian that changes with the step size only; it is factorized once per size.
         constant_jacobian = law.linear_in_strain and (contact is None or isinstance(contact, Signorini))
@@ -383,118 +364,9 @@ class QuasistaticProblem:
             raise NonFiniteStateError(f"time step {n} (t = {t:.6g}) produced NaN/Inf in the state")
 
 
-def _check_time_scheme(time_scheme: str, law) -> str:
-    if time_scheme not in ("euler", "bdf2"):
-        raise InputError(f"time_scheme must be 'euler' or 'bdf2', got {time_scheme!r}")
-    if time_scheme == "bdf2" and (getattr(law, "scheme", None) != "implicit"
-                                  or not hasattr(law, "elasticity")):
-        raise InputError("time scheme 'bdf2' needs an implicit law (scheme 'implicit') with its "
-                         f"elasticity; got {type(law).__name__} with scheme "
-                         f"{getattr(law, 'scheme', None)!r}")
-    return time_scheme
-
-
-class _Bdf2:
-    """BDF2 for σ̇ = E ε̇ + G(σ, ε) through the implicit-Euler kernel.
-
-    With w = σ − E ε, ω = k_n/k_{n−1} and variable-step BDF2 coefficients,
-
-        w_n = a1 w_{n−1} + a2 w_{n−2} + b k_n G(σ_n, ε_n),
-        a1 = (1+ω)²/(1+2ω), a2 = −ω²/(1+2ω), b = (1+ω)/(1+2ω)
-
-    (4/3, −1/3, 2/3 for constant steps). The implicit-Euler kernel computes
-    σ = σ_old + E(ε − ε_old) + dt G(σ, ε); given σ_old = a1 w_{n−1} + a2 w_{n−2}, ε_old = 0 and
-    dt = b k_n it returns exactly the BDF2 σ_n, with its consistent tangent.
-    """
-
-    def __init__(self, law):
-        self.E = law.elasticity.matrix()
-        self.w_prev: Optional[np.ndarray] = None  # w_{n−2}: w before the last accepted step
-        self.dt_prev = 0.0
-        self.active = False
-        self._inputs = None
-
-    def prepare(self, state, dt: float) -> float:
-        """Set up the step of size dt; return the kernel's effective step."""
-        self.active = self.w_prev is not None
-        if not self.active:
-            return dt
-        omega = dt / self.dt_prev
-        a1, a2 = (1 + omega) ** 2 / (1 + 2 * omega), -omega**2 / (1 + 2 * omega)
-        w_now = state.view(state.stress_old) - state.view(state.strain_old) @ self.E
-        history = a1 * w_now + a2 * self.w_prev
-        self._inputs = (history, np.zeros_like(history), (1 + omega) / (1 + 2 * omega) * dt)
-        return self._inputs[2]
-
-    def inputs(self):
-        return self._inputs
-
-    def accept(self, state, dt: float) -> None:
-        """Keep w_{n−1} (the committed state before this step) and k_n for the next step."""
-        self.w_prev = state.view(state.stress_old) - state.view(state.strain_old) @ self.E
-        self.dt_prev = dt
-
-
-class _PointDofs:
-    """The owned dofs of the vertex where a point load acts (on one rank only)."""
-
-    def __init__(self, V, load: PointLoad):
-        mesh = V.mesh
-        dim = mesh.topology.dim
-        at = np.zeros(3)
-        at[:dim] = np.asarray(load.at, dtype=np.float64)[:dim]
-        extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
-        tol = 1e-8 * extent
-        blocks = fem.locate_dofs_geometrical(
-            V, lambda x: np.linalg.norm(x - at[:, None], axis=0) <= tol)
-        owned = blocks[blocks < V.dofmap.index_map.size_local]
-        found = mesh.comm.allreduce(len(owned), op=MPI.SUM)
-        if found == 0:
-            raise InputError(f"point load at {list(load.at)} is not at a mesh vertex (tolerance {tol:.3g})")
-        # A vertex shared by ranks is owned by one of them: exactly one rank applies the load.
-        bs = V.dofmap.index_map_bs
-        self.dofs = (owned[:1, None] * bs + np.arange(bs)[None, :]).ravel().astype(np.int32)
-        self.force = load.force
-        self.dim = dim
-
-    def values(self, t: float) -> np.ndarray:
-        if len(self.dofs) == 0:
-            return np.zeros(0)
-        f = np.asarray(self.force(t), dtype=np.float64).reshape(-1)
-        if f.shape != (self.dim,):
-            raise InputError(f"point load force must have {self.dim} components, got {f.shape[0]}")
-        return f
-
-
 def _unrolled(V, blocks: np.ndarray, exclude: np.ndarray) -> np.ndarray:
     """Owned unrolled dofs of the nodes ``blocks``, without those in ``exclude``."""
     bs = V.dofmap.index_map_bs
     blocks = blocks[blocks < V.dofmap.index_map.size_local]
     dofs = (blocks[:, None] * bs + np.arange(bs)).ravel()
     return dofs[~np.isin(dofs, exclude)].astype(np.int32)
-
-
-def _as_vector(expr, dim: int):
-    """Accept scalar loads in 1-D."""
-    if dim == 1 and ufl.shape(expr) == ():
-        return ufl.as_vector([expr])
-    return ufl.as_vector(expr) if isinstance(expr, (list, tuple)) else expr
-
-
-def tag_facets(mesh, markers: Dict[int, Callable[[np.ndarray], np.ndarray]]):
-    """Facet meshtags from geometric predicates {tag: f(x) -> bool array} on the boundary."""
-    fdim = mesh.topology.dim - 1
-    indices, values = [], []
-    for tag, predicate in markers.items():
-        facets = dmesh.locate_entities_boundary(mesh, fdim, predicate)
-        indices.append(facets)
-        values.append(np.full(len(facets), tag, dtype=np.int32))
-    indices = np.concatenate(indices) if indices else np.zeros(0, dtype=np.int32)
-    values = np.concatenate(values) if values else np.zeros(0, dtype=np.int32)
-    unique, counts = np.unique(indices, return_counts=True)
-    shared = set(values[np.isin(indices, unique[counts > 1])].tolist())
-    shared = sorted(set().union(*mesh.comm.allgather(shared)))  # raise on all ranks together
-    if shared:
-        raise InputError(f"boundary parts {shared} overlap: a facet may belong to one part only")
-    order = np.argsort(indices)
-    return dmesh.meshtags(mesh, fdim, indices[order].astype(np.int32), values[order])
