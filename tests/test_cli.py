@@ -241,3 +241,22 @@ def test_perzyna_scene_builds_the_viscoplastic_law():
     model = build(scenes.load(scenes.resolve("signorini_2d")))
     assert isinstance(model.problem.law, Perzyna)
     assert model.problem.law.sigma_y == pytest.approx(math.sqrt(10.0))
+
+
+@pytest.mark.serial
+@pytest.mark.parametrize("verbose", [False, True])
+def test_jit_messages_only_with_verbose(tmp_path, verbose):
+    """A first run on a fresh machine (an empty JIT cache) shows the progress summary only; the
+    form compiler's build messages appear with -v."""
+    import os
+    import subprocess
+    import sys
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    command = [sys.executable, "-m", "vpcontact", "run", "elastic_2d", "--out",
+               str(tmp_path / "out"), "--quiet"] + (["-v"] if verbose else [])
+    result = subprocess.run(command, env=env, capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    assert any((tmp_path / "cache").rglob("*.so")), "the forms must have been compiled afresh"
+    shown = result.stdout + result.stderr
+    assert ("INFO" in shown) == verbose, shown[-2000:]
+    assert "elastic_2d: t = 1" in result.stdout

@@ -36,7 +36,7 @@ def rotation(dim: int, angle: float) -> np.ndarray:
     return np.eye(3) + s * K + (1 - c) * K @ K
 
 
-def block_on_floor(dim: int, Q: np.ndarray, contact: str, rotate=None):
+def block_on_floor(dim: int, Q: np.ndarray, contact: str, rotate=None, petsc_options=None):
     """A block clamped on top, pulled down by its weight onto a floor 0.01 below its bottom; the
     whole problem (mesh, load, floor) turned by Q. Returns the problem after the load is on."""
     if dim == 2:
@@ -61,7 +61,7 @@ def block_on_floor(dim: int, Q: np.ndarray, contact: str, rotate=None):
     else:
         condition = NormalCompliance(2, mu=1e-4, alpha=1.0, gap=0.01)
     problem = QuasistaticProblem(msh, tags, law, clamped_tag=1, loads=loads, contact=condition,
-                                 rotate_contact=rotate)
+                                 rotate_contact=rotate, petsc_options=petsc_options)
     for _ in advance(problem, 1.0, StepControl(0.5)):
         pass
     return problem
@@ -160,3 +160,17 @@ def test_reactions_contact_force_and_loads_balance():
     load = rotation(2, 0.3) @ np.array([0.0, -200.0 * 0.5])  # weight of the 1 × 0.5 block
     assert np.allclose(reactions.sum(axis=0) + contact + load, 0.0, atol=1e-9 * 100.0)
     assert np.linalg.norm(contact) > 1.0
+
+
+def test_lagged_multigrid_solves_in_the_frames():
+    """The VI's lagged GAMG solver (near-null space turned with the frames) gives the answer of
+    the default lagged LU on a turned problem."""
+    Q = rotation(2, math.radians(30.0))
+    reference = state(block_on_floor(2, Q, "signorini"), Q)
+    msh_problem = block_on_floor(2, Q, "signorini", petsc_options={
+        "vpcontact_vi_linear": "lagged_gamg"})
+    assert msh_problem.solver.lagged_lu.__class__.__name__ == "LaggedMultigrid"
+    f, a, u = state(msh_problem, Q)
+    assert a == reference[1]
+    assert np.allclose(f, reference[0], rtol=1e-7)
+    assert np.abs(u - reference[2]).max() <= 1e-7 * np.abs(reference[2]).max()

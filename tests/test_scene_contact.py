@@ -188,3 +188,70 @@ def test_show_writes_the_new_keys_back(shared_tmp_path, capsys):
     text = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:
         assert 'displacement = ["free", "-0.01*t"]' in text
+
+
+CYLINDER = """\
+name = "cylinder"
+
+[mesh]
+type = "gmsh"
+file = "cylinder.msh"
+dim = 2
+
+[boundary.contact]
+kind = "contact"
+tag = 1
+
+[boundary.top]
+kind = "displacement"
+tag = 2
+displacement = ["free", "-0.005*t"]
+
+[boundary.axis]
+kind = "symmetry"
+tag = 3
+
+[boundary.rest]
+kind = "traction"
+tag = 5
+
+[material]
+E = 1.0
+nu = 0.3
+plane = "strain"
+
+[contact]
+CONTACT
+
+[time]
+T = 1.0
+k = 1.0
+"""
+
+
+def test_curved_face_on_a_foundation_surface_from_a_scene(shared_tmp_path):
+    """Normal compliance on a curved Γ3 (a Gmsh cylinder) against a foundation surface given as
+    an obstacle: a stiff foundation carries the Signorini force, and contact.csv holds
+    σ_ν = -(1/μ)(u_ν - g)_+ in the nodes' normals."""
+    from vpcontact.studies import hertz
+    hertz.cylinder_msh(shared_tmp_path / "cylinder.msh", h_contact=0.01)
+    forces = {}
+    for kind, contact in (
+            ("signorini", 'type = "signorini"\nboundary = "contact"\n'
+                          'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }'),
+            ("normal_compliance", 'type = "normal_compliance"\nboundary = "contact"\nmu = 1e-4\n'
+                                  'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }')):
+        scene = _write(shared_tmp_path / f"{kind}.toml", CYLINDER.replace("CONTACT", contact))
+        out = shared_tmp_path / kind
+        assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+        header, rows = _csv(out / "reactions.csv")
+        forces[kind] = rows[-1, header.index("contact_y")]
+        contact_rows = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
+        last = contact_rows[contact_rows[:, 0] == 1.0]
+        if kind == "normal_compliance":
+            expected = -np.maximum(last[:, 4] - last[:, 5], 0.0) / 1e-4
+            # (u_ν and g are written to 11 digits; their difference loses some of them)
+            assert np.allclose(last[:, 6], expected, atol=1e-6 * np.abs(expected).max())
+        assert (last[:, 6] < 0).sum() >= 5  # several nodes in contact
+    assert forces["signorini"] > 1e-3
+    assert abs(forces["normal_compliance"] / forces["signorini"] - 1) < 0.05, forces
