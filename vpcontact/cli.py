@@ -26,8 +26,8 @@ from typing import Optional
 
 from mpi4py import MPI
 
-from vpcontact.errors import (ConvergenceError, InputError, NonFiniteStateError, StepRejected,
-                              VpcontactError)
+from vpcontact.errors import (ConvergenceError, InputError, Interrupted, NonFiniteStateError,
+                              OutputError, StepRejected, VpcontactError)
 
 
 def main(argv: Optional[list] = None) -> int:
@@ -40,6 +40,16 @@ def main(argv: Optional[list] = None) -> int:
     comm = MPI.COMM_WORLD
     try:
         return args.func(args, comm)
+    except Interrupted as err:  # outputs, checkpoint and summary are on disk: one line, no trace
+        if comm.rank == 0:
+            out = getattr(args, "out_folder", None)
+            print(f"vpcontact: {err}; outputs and a checkpoint are in {out} (continue with "
+                  f"--resume)", file=sys.stderr, flush=True)
+        return exit_status(err.signal)
+    except OutputError as err:
+        _error(comm, f"{err}. The completed steps and the record were kept as far as they "
+                     "could be written.")
+        return 1
     except (ConvergenceError, NonFiniteStateError, StepRejected) as err:
         _error(comm, f"the simulation failed: {err}. Try a smaller time step ([time] k), more "
                      "step halvings ([time] max_cuts) or a finer mesh.")
@@ -73,6 +83,8 @@ def _parser() -> argparse.ArgumentParser:
     run.add_argument("--petsc-options", nargs="+", default=[], metavar="KEY=VALUE",
                      help="PETSc options for the step solver, e.g. snes_rtol=1e-9")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
+    run.add_argument("--resume", action="store_true",
+                     help="continue the run in --out from its last checkpoint")
     run.set_defaults(func=_run)
     for name, func, text in (("validate", _validate, "check a scene without running it"),
                              ("show", _show, "print the scene with all defaults filled in")):
@@ -112,6 +124,12 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--quiet", action="store_true", help="no line per run")
     study.set_defaults(func=lambda args, comm: (study.print_help(), 2)[1])
     return parser
+
+
+def exit_status(signal_name: str) -> int:
+    """128 + the signal's number: 130 for SIGINT, 143 for SIGTERM."""
+    import signal
+    return 128 + int(getattr(signal, signal_name))
 
 
 def _error(comm, message: str) -> None:
@@ -163,8 +181,10 @@ def _petsc_options(pairs) -> dict:
 
 
 def _run(args, comm) -> int:
-    from vpcontact.scene.builder import build
+    from vpcontact.output.interrupt import StopRequest
+    from vpcontact.output.lock import OutputLock, check_folder
     from vpcontact.output.session import Session
+    from vpcontact.scene.builder import build
     scene = _load(args.scene)
     extra = _petsc_options(args.petsc_options)
     if extra:
@@ -172,10 +192,17 @@ def _run(args, comm) -> int:
         solver = dataclasses.replace(scene.solver,
                                      petsc_options={**scene.solver.petsc_options, **extra})
         scene = dataclasses.replace(scene, solver=solver)
-    model = build(scene, comm)
     out = Path(args.out or Path("output") / scene.name)
-    session = Session(model, out, progress=not args.quiet)
-    return session.run()
+    args.out_folder = out
+    check_folder(out)
+    with StopRequest() as stop:  # SIGINT/SIGTERM: stop after the step in progress
+        model = build(scene, comm)
+        lock = OutputLock(out, comm)
+        try:
+            return Session(model, out, progress=not args.quiet, stop=stop,
+                           resume=args.resume).run()
+        finally:
+            lock.release()
 
 
 def _study_setup(args, comm):

@@ -53,3 +53,21 @@ class StepRejected(VpcontactError):
         self.ratio, self.order, self.time = ratio, order, time
         super().__init__(f"step to t = {time:.6g} rejected: local error estimate {ratio:.3g} "
                          "times the tolerance")
+
+
+class OutputError(VpcontactError, OSError):
+    """An output could not be written (full disk, unwritable folder, a file in the way)."""
+
+
+class Interrupted(VpcontactError):
+    """The run was stopped by a signal (SIGINT or SIGTERM) at a clean point between steps.
+
+    Attributes:
+        signal: ``"SIGINT"`` or ``"SIGTERM"``.
+    """
+
+    def __init__(self, signal: str, time: float):
+        self.signal = signal
+        self.time = time
+        super().__init__(f"interrupted by {signal} at t = {time:.6g}")
+

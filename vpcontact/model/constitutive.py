@@ -191,6 +191,15 @@ class PlaneStrain:
         """Accept the step: σ33 of the new state becomes the old one."""
         self._s33_old[:] = self._s33
 
+    def internal_state(self) -> dict:
+        """σ33 at the quadrature points (committed and current), for checkpoints."""
+        return {"s33_old": self._s33_old.copy(), "s33": self._s33.copy()}
+
+    def set_internal_state(self, arrays: dict) -> None:
+        """Restore what :meth:`internal_state` returned."""
+        self._s33_old = np.array(arrays["s33_old"], dtype=np.float64)
+        self._s33 = np.array(arrays["s33"], dtype=np.float64)
+
     def out_of_plane_stress(self) -> np.ndarray:
         """σ33 at the points of the last update (same order as the stress arrays)."""
         return self._s33

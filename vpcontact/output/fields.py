@@ -78,7 +78,8 @@ class CellStress:
 class XdmfSeries:
     """XDMF time series (for ParaView) of displacement, stress and von Mises norm."""
 
-    def __init__(self, path: str | Path, u: fem.Function, cell_stress: CellStress, extra=()):
+    def __init__(self, path: str | Path, u: fem.Function, cell_stress: CellStress, extra=(),
+                 append: bool = False):
         mesh = u.function_space.mesh
         self.u = u
         self.extra = list(extra)  # (Function, refresh()) written after the built-in fields
@@ -88,10 +89,17 @@ class XdmfSeries:
         if degree != 1:  # XDMF needs fields of the geometry's degree
             V1 = fem.VectorFunctionSpace(mesh, ("Lagrange", 1), dim=mesh.geometry.dim)
             self._u_out = fem.Function(V1, name="displacement")
-        self.file = io.XDMFFile(mesh.comm, str(path), "w")
-        self.file.write_mesh(mesh)
+        self.skip: set[float] = set()  # times already in the file (a resumed run's)
+        if append and Path(path).is_file():
+            self.skip = written_times(path, mesh.comm)
+            self.file = io.XDMFFile(mesh.comm, str(path), "a")
+        else:
+            self.file = io.XDMFFile(mesh.comm, str(path), "w")
+            self.file.write_mesh(mesh)
 
     def write(self, t: float) -> None:
+        if any(abs(t - s) <= 1e-9 * max(1.0, abs(t)) for s in self.skip):
+            return  # a resumed run recomputes the steps after its checkpoint: already written
         if self._u_out is not self.u:
             self._u_out.interpolate(self.u)
         self.cells.update()
@@ -104,6 +112,33 @@ class XdmfSeries:
 
     def close(self) -> None:
         self.file.close()
+
+
+def on_rank0(comm, action) -> None:
+    """Run ``action`` (which writes a file) on rank 0; every rank returns once it is done, or
+    raises OSError if it failed (so that no rank is left waiting for the others)."""
+    failure = None
+    if comm.rank == 0:
+        try:
+            action()
+        except OSError as err:
+            failure = str(err)
+    failure = comm.bcast(failure, root=0)
+    if failure is not None:
+        raise OSError(failure)
+
+
+def written_times(path: str | Path, comm) -> set[float]:
+    """The times of the grids in an XDMF time series (read on rank 0)."""
+    times = None
+    if comm.rank == 0:
+        import xml.etree.ElementTree as ElementTree
+        try:
+            root = ElementTree.parse(path).getroot()
+            times = {float(e.get("Value")) for e in root.iter("Time")}
+        except (OSError, ElementTree.ParseError, TypeError, ValueError):
+            times = set()
+    return comm.bcast(times, root=0)
 
 
 class ContactHistory:
@@ -148,10 +183,20 @@ class ContactHistory:
             self.normal_displacement.append(un)
             self.pressure.append(p)
 
+    def restore(self, arrays: dict) -> None:
+        """The records of a checkpoint (:mod:`vpcontact.output.checkpoint`), on rank 0."""
+        if self.comm.rank != 0 or "times" not in arrays:
+            return
+        self.times = [float(t) for t in arrays["times"]]
+        if self.times:
+            self.normal_displacement = list(arrays["un"])
+            self.pressure = list(arrays["pressure"])
+            self.gaps = list(arrays["gap"])
+
     def write_csv(self, path: str | Path) -> None:
         """Long format: t, x, y, z, u_normal, gap, pressure, written by rank 0; the file is on
         disk when any rank returns."""
-        if self.comm.rank == 0:
+        def write():
             with open(path, "w") as f:
                 f.write("t,x,y,z,u_normal,gap,pressure\n")
                 for t, un, gap, p in zip(self.times, self.normal_displacement, self.gaps,
@@ -159,7 +204,7 @@ class ContactHistory:
                     for (x, y, z), u_i, g_i, p_i in zip(self.points, un, gap, p):
                         f.write(f"{t:.10g},{x:.10g},{y:.10g},{z:.10g},"
                                 f"{u_i:.10e},{g_i:.10e},{p_i:.10e}\n")
-        self.comm.barrier()
+        on_rank0(self.comm, write)
 
 
 def _gather(comm, array: np.ndarray) -> np.ndarray:

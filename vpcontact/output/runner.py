@@ -10,10 +10,12 @@ from pathlib import Path
 from typing import Optional
 
 from vpcontact.output.fields import CellStress, ContactHistory, XdmfSeries
+from vpcontact.errors import OutputError, VpcontactError
+from vpcontact.output.checkpoint import Checkpointer, Restart, restore_control
 from vpcontact.output.forces import ForceHistory
 from vpcontact.solver.problem import QuasistaticProblem
 from vpcontact.model.signorini import ContactReport
-from vpcontact.solver.stepping import StepControl, advance
+from vpcontact.solver.stepping import Cut, StepControl, advance
 
 
 @dataclass
@@ -26,16 +28,23 @@ class RunRecord:
     contact: list = field(default_factory=list)      # ContactReport per step (Signorini)
     cuts: list = field(default_factory=list)         # stepping.Cut per rejected step
     completed: bool = False                          # reached t_final
+    interrupted: Optional[str] = None                # the signal that stopped the run, if any
     wall_time: float = 0.0                           # [s] the whole run, outputs included
     output_time: float = 0.0                         # [s] writing XDMF, recording the history
 
 
 @contextmanager
-def _timed(record: RunRecord):
-    """Add the wall time of the block to ``record.output_time``."""
+def _timed(record: RunRecord, out: Optional[Path] = None):
+    """Add the wall time of the block (which writes outputs) to ``record.output_time``; a
+    failure to write (a full disk, an unwritable folder: OSError, or HDF5's RuntimeError) becomes
+    an :class:`OutputError` naming the folder."""
     start = _time.perf_counter()
     try:
         yield
+    except (OSError, RuntimeError) as err:
+        if isinstance(err, VpcontactError):
+            raise
+        raise OutputError(f"cannot write the outputs into {out}: {err}") from err
     finally:
         record.output_time += _time.perf_counter() - start
 
@@ -45,7 +54,9 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         max_cuts: int = 12, history: Optional[ContactHistory] = None,
         tolerance: Optional[float] = None,
         csv_name: str = "contact_history.csv", progress=None, xdmf_every: int = 1,
-        xdmf_extra=(), forces: Optional[ForceHistory] = None
+        xdmf_extra=(), forces: Optional[ForceHistory] = None, stop=None,
+        checkpoints: Optional[Checkpointer] = None, restart: Optional[Restart] = None,
+        record: Optional[RunRecord] = None
         ) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
     """Advance ``problem`` to ``t_final`` with steps of at most ``dt``, writing outputs into ``out``.
 
@@ -57,11 +68,18 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     report)`` is called after every accepted step on every rank; the XDMF series gets every
     ``xdmf_every``-th step and the last one, with the fields ``xdmf_extra`` ((Function, refresh)
     pairs) besides u, stress and von Mises norm. ``forces`` records the support reactions and
-    the contact force at every step (``reactions.csv``).
+    the contact force at every step (``reactions.csv``). ``stop`` (a
+    :class:`~vpcontact.output.interrupt.StopRequest`) is asked after every step; when a signal
+    came, the outputs are closed, a checkpoint is written and :class:`Interrupted` is raised.
+    ``checkpoints`` writes checkpoints; ``restart`` continues a run from one (the problem has
+    been restored already; outputs are appended). ``record``: filled in place (so that a caller
+    keeps it when the run fails).
 
     Returns the run record, the contact history (Signorini problems) and the cell stress fields.
     """
     control = StepControl(dt, max_cuts=max_cuts, tolerance=tolerance)
+    if restart is not None:
+        restore_control(control, restart)
     comm = problem.mesh.comm
     cells = CellStress(problem.state, getattr(problem.law, "out_of_plane_stress", None))
     series = None
@@ -69,17 +87,27 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         if comm.rank == 0:
             Path(out).mkdir(parents=True, exist_ok=True)
         comm.barrier()
-    record = RunRecord()
+    record = record if record is not None else RunRecord()
+    if restart is not None:
+        _restore_record(record, restart.record)
     start = _time.perf_counter()  # wall_time covers everything output_time counts
     if out is not None and xdmf:
-        with _timed(record):
-            series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells, extra=xdmf_extra)
+        with _timed(record, out):
+            series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells, extra=xdmf_extra,
+                                append=restart is not None)
     if history is None and problem.contact_dofs is not None:
         history = ContactHistory(problem)
-    if history is not None:
-        history.record(0.0)
-    if forces is not None:
-        forces.record(0.0)
+    if restart is not None:
+        if history is not None:
+            history.restore(restart.history)
+        if forces is not None:
+            forces.restore(restart.forces)
+    else:
+        if history is not None:
+            history.record(0.0)
+        if forces is not None:
+            forces.record(0.0)
+    interrupted = None
     try:
         for step in advance(problem, t_final, control):
             record.times.append(step.time)
@@ -90,7 +118,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                 report = problem.contact_monitor.report()
                 record.contact.append(report)
             last = step.time >= t_final * (1 - 1e-12)
-            with _timed(record):
+            with _timed(record, out):
                 if history is not None:
                     history.record(step.time)
                 if forces is not None:
@@ -103,20 +131,37 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                 active = f"  active contact dofs {report.active:4d}" if report else ""
                 print(f"step {step.step:4d}  t = {step.time:.4f}  Newton its {step.newton_iterations}"
                       f"{active}", flush=True)
-        record.completed = True
+            interrupted = stop.agreed(comm) if stop is not None else None
+            if checkpoints is not None and (interrupted or checkpoints.due(step.step)):
+                with _timed(record, out):
+                    checkpoints.write(record, control, history, forces)
+            if interrupted:
+                break
+        else:
+            record.completed = True
     finally:
         record.cuts = list(control.cuts)
-        with _timed(record):
+        with _timed(record, out):
             if series is not None:
                 series.close()
         cells.update()
-        with _timed(record):
+        with _timed(record, out):
             if out is not None and history is not None:
                 history.write_csv(Path(out) / csv_name)
             if out is not None and forces is not None:
                 forces.write_csv(Path(out) / "reactions.csv")
         record.wall_time = _time.perf_counter() - start
+    record.interrupted = interrupted
     return record, history, cells
+
+
+def _restore_record(record: RunRecord, saved: dict) -> None:
+    """``record`` as a checkpoint's manifest has it."""
+    record.times = list(saved["times"])
+    record.newton_iterations = list(saved["newton_iterations"])
+    record.reasons = list(saved["reasons"])
+    record.contact = [ContactReport(**c) for c in saved["contact"]]
+    record.cuts = [Cut(**c) for c in saved["cuts"]]
 
 
 def print_summary(record: RunRecord, out: Path, comm, force_unit: str = "N") -> None:

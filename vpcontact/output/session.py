@@ -14,6 +14,7 @@ step halvings keeps the completed steps and is marked ``"completed": false``.
 from __future__ import annotations
 
 import json
+import shutil
 import platform
 import sys
 import time
@@ -25,8 +26,9 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from vpcontact.model.signorini import Signorini, contact_dofs
-from vpcontact.output import plots, runner
-from vpcontact.output.fields import ContactHistory
+from vpcontact.errors import Interrupted, OutputError
+from vpcontact.output import checkpoint, plots, runner
+from vpcontact.output.fields import ContactHistory, on_rank0
 from vpcontact.output.forces import ForceHistory
 from vpcontact.scene.builder import Model, obstacle_level_set
 from vpcontact.solver.step_solver import time_split
@@ -35,35 +37,58 @@ from vpcontact.solver.step_solver import time_split
 class Session:
     """Run ``model`` to its final time, writing into ``out``."""
 
-    def __init__(self, model: Model, out: Path, progress: bool = True):
+    def __init__(self, model: Model, out: Path, progress: bool = True, stop=None,
+                 resume: bool = False):
         self.model = model
         self.out = Path(out)
         self.comm = model.problem.mesh.comm
         self.show_progress = progress
+        self.stop = stop  # a StopRequest (SIGINT/SIGTERM), asked after every step
+        self.resume = resume
+        self.restart = None
         self._bar = _ProgressBar(model.scene.time.T) if progress and self.comm.rank == 0 else None
 
     def run(self) -> int:
-        """Simulate; return the exit status (0 completed, 1 failed with outputs kept)."""
+        """Simulate; return the exit status (0 completed, 1 failed with outputs kept).
+
+        Raises:
+            Interrupted: a signal stopped the run (outputs, checkpoint and summary written).
+            OutputError: an output could not be written (what could be written was).
+        """
         scene, problem = self.model.scene, self.model.problem
+        if self.resume:
+            self.restart = checkpoint.load(self.out, problem, scene, self.comm)
+        else:  # a fresh run: an older run's checkpoint must not be resumed on top of it
+            on_rank0(self.comm, lambda: shutil.rmtree(self.out / checkpoint.FOLDER,
+                                                      ignore_errors=True))
         history = self._history()
         self.forces = ForceHistory(problem)
+        checkpoints = checkpoint.Checkpointer(self.out, problem, scene, self.comm,
+                                              scene.output.checkpoint_every)
         start = time.perf_counter()
-        record = None
+        record = runner.RunRecord()
         error: Optional[Exception] = None
         try:
-            record, history, cells = runner.run(
+            _, history, cells = runner.run(
                 problem, scene.time.T, scene.time.k, out=self.out, name=scene.name,
                 xdmf=scene.output.xdmf, verbose=False, max_cuts=scene.time.max_cuts,
                 tolerance=scene.time.tolerance,
                 history=history, csv_name="contact.csv", progress=self._progress,
                 xdmf_every=scene.output.every, xdmf_extra=self._pressure_field(history),
-                forces=self.forces)
+                forces=self.forces, stop=self.stop, checkpoints=checkpoints,
+                restart=self.restart, record=record)
         except Exception as err:  # re-raised below once the summary is on disk
             error = err
         if self._bar is not None:
             self._bar.close()
         wall = time.perf_counter() - start
-        self._write_summary(record, wall, error)
+        if record is not None and record.interrupted and error is None:
+            error = Interrupted(record.interrupted, record.times[-1] if record.times else 0.0)
+        try:
+            self._write_summary(record, wall, error)
+        except OSError as err:
+            if error is None or isinstance(error, Interrupted):
+                error = OutputError(f"cannot write {self.out / 'summary.json'}: {err}")
         if record is None or error is not None:
             raise error
         if scene.output.figures:
@@ -145,6 +170,9 @@ class Session:
             "mpi_ranks": self.comm.size,
             "completed": bool(record is not None and record.completed and error is None),
             "error": None if error is None else str(error),
+            "interrupted_by": None if record is None else record.interrupted,
+            "resumed_from": None if self.restart is None else {"step": self.restart.step,
+                                                               "time": self.restart.time},
             "steps": 0 if record is None else len(record.times),
             "final_time": None if record is None or not record.times else record.times[-1],
             "newton_iterations": [] if record is None else record.newton_iterations,
@@ -162,10 +190,10 @@ class Session:
             "vi_solves": solver.vi_solves,
             "vi_linear_solves": None if solver.lagged_lu is None else solver.lagged_lu.counters(),
         }
-        if self.comm.rank == 0:
+        def write():
             self.out.mkdir(parents=True, exist_ok=True)
             (self.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-        self.comm.barrier()  # the summary is on disk when any rank returns
+        on_rank0(self.comm, write)  # the summary is on disk when any rank returns
 
 
 def _bounds(problem, axis: int):

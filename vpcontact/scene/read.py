@@ -356,12 +356,13 @@ def _petsc_option_problem(key: str, value: Any) -> str | None:
 
 
 def read_output(top: Table, contact: ContactSpec | None) -> OutputSpec:
-    """``[output]``: XDMF, contact CSV (only with contact), figures, XDMF stride."""
-    t = top.section("output", ("xdmf", "contact_csv", "figures", "every"))
+    """``[output]``: XDMF, contact CSV (only with contact), figures, XDMF stride, checkpoints."""
+    t = top.section("output", ("xdmf", "contact_csv", "figures", "every", "checkpoint_every"))
     with_contact = contact is not None and contact.type != "none"
     contact_csv = t.boolean("contact_csv", with_contact)
     if contact_csv and contact is not None and not with_contact:
         t.add("contact_csv", "needs a [contact] section with type other than 'none'")
     return OutputSpec(xdmf=t.boolean("xdmf", True), contact_csv=contact_csv,
                       figures=t.boolean("figures", True),
-                      every=t.integer("every", 1, check=at_least(1)))
+                      every=t.integer("every", 1, check=at_least(1)),
+                      checkpoint_every=t.integer("checkpoint_every", 10, check=at_least(0)))

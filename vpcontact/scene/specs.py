@@ -241,9 +241,11 @@ class SolverSpec:
 
 @dataclass(frozen=True)
 class OutputSpec:
-    """``[output]``: what to write, and the XDMF stride."""
+    """``[output]``: what to write, the XDMF stride, and checkpoints every ``checkpoint_every``
+    steps (0: only when interrupted)."""
 
     xdmf: bool = True
     contact_csv: bool = False
     figures: bool = True
     every: int = 1
+    checkpoint_every: int = 10

@@ -128,5 +128,6 @@ def dump(scene: Any) -> str:
                                 "petsc_options": scene.solver.petsc_options})
     output = scene.output
     blocks += _table("output", {"xdmf": output.xdmf, "contact_csv": output.contact_csv,
-                                "figures": output.figures, "every": output.every})
+                                "figures": output.figures, "every": output.every,
+                                "checkpoint_every": output.checkpoint_every})
     return "\n".join(blocks)

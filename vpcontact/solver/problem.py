@@ -315,6 +315,63 @@ class QuasistaticProblem:
             warnings.warn(message, RuntimeWarning, stacklevel=3)
             self._warned_unstable = True
 
+    def checkpoint(self) -> tuple[dict, dict]:
+        """(scalars, arrays): the state at the last accepted step — u, the quadrature-point
+        stress, strain and tangent, the law's own internal variables, the predictor's and BDF2's
+        history, the time and step, the contact flag, and the solver's (see
+        :meth:`StepSolver.checkpoint`). Arrays are this rank's local values (ghosts included)."""
+        st = self.state
+        arrays = {"u": self.u.x.array, "stress": st.stress.x.array,
+                  "stress_old": st.stress_old.x.array, "strain_old": st.strain_old.x.array,
+                  "tangent": st.tangent.x.array}
+        for name in ("_u_prev", "_u_prev2"):
+            if getattr(self, name) is not None:
+                arrays[name] = getattr(self, name)
+        if hasattr(self.law, "internal_state"):
+            arrays.update({f"law_{k}": v for k, v in self.law.internal_state().items()})
+        if self._bdf2 is not None and self._bdf2.w_prev is not None:
+            arrays["bdf2_w_prev"] = self._bdf2.w_prev
+        solver_flags, solver_arrays = self.solver.checkpoint()
+        arrays.update({f"solver_{k}": v for k, v in solver_arrays.items()})
+        scalars = {"time": float(self.time.value), "dt": self.dt, "step_index": self.step_index,
+                   "dt_prev": self._dt_prev, "dt_prev2": self._dt_prev2,
+                   "contact_active": self._contact_active, "tangent_key": self._tangent_key,
+                   "bdf2_dt_prev": self._bdf2.dt_prev if self._bdf2 is not None else None,
+                   "solver": solver_flags}
+        return scalars, {k: np.asarray(v) for k, v in arrays.items()}
+
+    def restore(self, scalars: dict, arrays: dict) -> None:
+        """Continue from :meth:`checkpoint` (same mesh, partition and scene)."""
+        st = self.state
+        for name, function in (("u", self.u), ("stress", st.stress), ("stress_old", st.stress_old),
+                               ("strain_old", st.strain_old), ("tangent", st.tangent)):
+            if arrays[name].shape != function.x.array.shape:
+                raise InputError(f"the checkpoint's {name} has {arrays[name].size} values here, "
+                                 f"the problem {function.x.array.size}: another mesh or partition")
+            function.x.array[:] = arrays[name]
+        self._u_prev = arrays["_u_prev"].copy() if "_u_prev" in arrays else None
+        self._u_prev2 = arrays["_u_prev2"].copy() if "_u_prev2" in arrays else None
+        law_state = {k[4:]: v for k, v in arrays.items() if k.startswith("law_")}
+        if law_state:
+            self.law.set_internal_state(law_state)
+        if self._bdf2 is not None:
+            self._bdf2.w_prev = arrays["bdf2_w_prev"].copy() if "bdf2_w_prev" in arrays else None
+            self._bdf2.dt_prev = scalars["bdf2_dt_prev"]
+        self.time.value = scalars["time"]
+        self.dt = scalars["dt"]
+        self.step_index = int(scalars["step_index"])
+        self._dt_prev, self._dt_prev2 = scalars["dt_prev"], scalars["dt_prev2"]
+        self._contact_active = bool(scalars["contact_active"])
+        key = scalars["tangent_key"]
+        self._tangent_key = tuple(key) if key is not None else None
+        if self.dirichlet.moving:
+            self.dirichlet.update(scalars["time"])
+        if isinstance(self.contact, Signorini) and self.contact.moving:
+            self.contact_dofs.gap = contact_gap(self.contact, self.contact_dofs, scalars["time"])
+            self.solver.update_bounds(*variable_bounds(self.u, self.contact_dofs))
+        self.solver.restore(scalars["solver"], {k[7:]: v for k, v in arrays.items()
+                                                if k.startswith("solver_")})
+
     def support_forces(self) -> tuple[np.ndarray, np.ndarray]:
         """(reactions, contact force) at the current state (collective): the force each Dirichlet
         part exerts on the body, shape (parts, dim), and the total force of the foundation or

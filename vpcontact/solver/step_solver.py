@@ -131,6 +131,7 @@ class StepSolver:
         self._point_forces = point_forces
         self.constant_jacobian = constant_jacobian
         self._jacobian_dt: Optional[float] = None  # step size of the assembled constant Jacobian
+        self._restored_jacobian_dt: Optional[float] = None  # the same before a restart
         self.dt = 0.0  # set by the owner before each solve (only the constant-Jacobian reuse reads it)
         self._A = fem_petsc.create_matrix(self._J)
         self._R = rotation
@@ -230,6 +231,31 @@ class StepSolver:
             new.array[finite] /= self.scale
             new.copy(old)
             new.destroy()
+
+    def checkpoint(self) -> tuple[dict, dict]:
+        """(flags and counters, arrays) to continue exactly after a restart (see
+        :mod:`vpcontact.output.checkpoint`)."""
+        flags = {"total_iterations": self.total_iterations,
+                 "jacobian_assemblies": self.jacobian_assemblies, "kernel_calls": self.kernel_calls,
+                 "vi_solves": self.vi_solves, "last_reason": self.last_reason,
+                 "jacobian_dt": self._jacobian_dt}
+        arrays = {}
+        if isinstance(self.lagged_lu, LaggedDirectSolve):
+            flags["lagged"], arrays = self.lagged_lu.checkpoint()
+        return flags, arrays
+
+    def restore(self, flags: dict, arrays: dict) -> None:
+        """Continue from :meth:`checkpoint`. A constant Jacobian is assembled again at the next
+        solve (the same values: the same state and step size) without expiring the restored
+        factors; the lagged multigrid (if used) rebuilds its hierarchy."""
+        self.total_iterations = int(flags["total_iterations"])
+        self.jacobian_assemblies = int(flags["jacobian_assemblies"])
+        self.kernel_calls = int(flags["kernel_calls"])
+        self.vi_solves = int(flags["vi_solves"])
+        self.last_reason = flags["last_reason"]
+        self._restored_jacobian_dt = flags["jacobian_dt"]
+        if "lagged" in flags and isinstance(self.lagged_lu, LaggedDirectSolve):
+            self.lagged_lu.restore(flags["lagged"], arrays)
 
     def _use_lagged_solver(self) -> None:
         """Reduced VI systems solved with a kept full-size preconditioner (vpcontact.solver.vi_linear)."""
@@ -343,7 +369,8 @@ class StepSolver:
             A.PtAP(self._R, result=A_snes)
         self._jacobian_dt = self.dt
         self.jacobian_assemblies += 1
-        if self.constant_jacobian and self.lagged_lu is not None:
+        restored, self._restored_jacobian_dt = self._restored_jacobian_dt, None
+        if self.constant_jacobian and self.lagged_lu is not None and self.dt != restored:
             self.lagged_lu.expire()  # a new step size: the factors of M are out of date
         self.timings["jacobian"] += _time.perf_counter() - start
 

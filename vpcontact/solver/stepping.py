@@ -55,6 +55,7 @@ class StepControl:
     tolerance: Optional[float] = None
     cuts: list = field(default_factory=list)
     next_dt: Optional[float] = None  # the step proposed after the last accepted one
+    resume: bool = False  # a restart: the next call continues with next_dt
 
     def __post_init__(self):
         if not self.dt > 0:
@@ -76,7 +77,8 @@ def advance(problem: QuasistaticProblem, t_final: float, control: StepControl) -
         raise InputError(f"final time {t_final} must exceed the current time {float(problem.time.value)}")
     # With error control a later call continues with the step proposed last; without, each call
     # starts from the nominal k (a cut then costs only the steps up to the next call's end).
-    dt = (control.next_dt if control.tolerance is not None else None) or control.dt
+    dt = (control.next_dt if control.tolerance is not None or control.resume else None) or control.dt
+    control.resume = False
     if control.tolerance is not None and problem.step_index == 0:
         # no history, no estimate: a first step of √tolerance · k has a small error, and
         # the controller grows k from there (by at most 2 per step)

@@ -199,6 +199,40 @@ class LaggedDirectSolve(_ReducedSolve):
         """Refactorize at the next solve (the Jacobian changed in a way GMRES should not chase)."""
         self._factored = False
 
+    def checkpoint(self) -> tuple[dict, dict]:
+        """(flags and counters, arrays): what :meth:`restore` needs to continue exactly — the
+        values of the factorized M (local rows, CSR), which a restart factorizes again."""
+        flags = {**self.counters(), "factored": self._factored, "skip_lagged": self._skip_lagged}
+        arrays = {}
+        if self._factored and self.matrix is not None:
+            indptr, indices, data = self.matrix.getValuesCSR()
+            arrays = {"M_indptr": indptr, "M_indices": indices, "M_data": data}
+        return flags, arrays
+
+    def restore(self, flags: dict, arrays: dict) -> None:
+        """Continue from a :meth:`checkpoint`: the same counters, and the same factors (M is
+        refactorized from its saved values; a factorization of the same matrix with the same
+        options gives the same factors, so the lagged solves repeat exactly in serial)."""
+        self.factorizations = int(flags["factorizations"])
+        self.substitutions = int(flags["substitutions"])
+        self.lagged_solves = int(flags["lagged_solves"])
+        self.lagged_failures = int(flags["lagged_failures"])
+        self._skip_lagged = bool(flags["skip_lagged"])
+        self._factored = False
+        if not flags["factored"] or "M_data" not in arrays:
+            return
+        if self.matrix is None:
+            self.matrix = self.jacobian.duplicate()
+            self.matrix.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)
+        self.matrix.zeroEntries()
+        self.matrix.setValuesCSR(arrays["M_indptr"], arrays["M_indices"], arrays["M_data"])
+        self.matrix.assemble()
+        self._choose_factorization()
+        self.inner.setOperators(self.matrix)
+        with options_in_database(self.prefix, self.options):
+            self.inner.setUp()
+        self._factored = True
+
     # --- PETSc python-KSP interface ------------------------------------------------------------
     def solve(self, ksp: PETSc.KSP, b: PETSc.Vec, x: PETSc.Vec) -> None:
         rtol, atol, _, _ = ksp.getTolerances()

@@ -1,0 +1,245 @@
+# SPDX-License-Identifier: MIT
+"""Runs that survive interruption: real SIGINT/SIGTERM sent to real runs (serial and 2 ranks),
+checkpoints and ``--resume`` (bit for bit in serial, to solver tolerance on 2 ranks), refused
+resumes, and the bad inputs and output failures that must end in a clear message."""
+
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from vpcontact import cli
+from vpcontact import scene as scenes
+
+pytestmark = pytest.mark.serial  # each test launches its own processes or writes shared files
+
+TIMING_KEYS = {"wall_time_s", "wall_time_split_s", "resumed_from"}
+
+
+def _scene(folder: Path, cells: int = 16, extra: str = "") -> Path:
+    """The paper's 2-D Signorini test on a cells × cells mesh (about 50 steps with cuts)."""
+    text = scenes.bundled()["signorini_2d"].read_text()
+    text = re.sub(r"(?m)^cells = .*$", f"cells = [{cells}, {cells}]", text)
+    path = folder / "scene.toml"
+    path.write_text(text + extra)
+    return path
+
+
+def _environment():
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
+    for key in ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"):
+        if key in os.environ:
+            env[key] = os.environ[key]
+    env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
+    return env
+
+
+def _command(scene: Path, out: Path, ranks: int, *extra) -> list:
+    command = [sys.executable, "-m", "vpcontact", "run", str(scene), "--out", str(out), *extra]
+    if ranks == 1:
+        return command
+    root = ["--allow-run-as-root"] if os.geteuid() == 0 else []
+    return [shutil.which("mpirun"), *root, "-n", str(ranks), *command]
+
+
+def _run(scene, out, ranks=1, *extra) -> subprocess.CompletedProcess:
+    return subprocess.run(_command(scene, out, ranks, *extra), capture_output=True, text=True,
+                          timeout=600, env=_environment())
+
+
+def _interrupt(scene: Path, out: Path, sig: int, ranks: int = 1, after: str = "30.0%"):
+    """Start a run, send ``sig`` once its progress passes ``after`` (to the ranks themselves,
+    as a scheduler does), and return (exit status, stdout, stderr)."""
+    process = subprocess.Popen(_command(scene, out, ranks), stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True, env=_environment())
+    for line in process.stdout:
+        if after in line:
+            break
+    else:
+        pytest.fail(f"the run ended before {after}: {process.stderr.read()[-2000:]}")
+    if ranks == 1:
+        process.send_signal(sig)
+    else:
+        ranks_found = subprocess.run(["pgrep", "-f", f"vpcontact run {scene} --out {out}"],
+                                     capture_output=True, text=True).stdout.split()
+        for pid in ranks_found:
+            if int(pid) != process.pid:
+                os.kill(int(pid), sig)
+    start = time.monotonic()
+    stdout, stderr = process.communicate(timeout=120)
+    assert time.monotonic() - start < 60, "the job must end promptly after the signal"
+    return process.returncode, stdout, stderr
+
+
+def _summary(out: Path) -> dict:
+    return json.loads((out / "summary.json").read_text())
+
+
+def _xdmf_times(path: Path) -> list:
+    import xml.etree.ElementTree as ElementTree
+    return [float(e.get("Value")) for e in ElementTree.parse(path).getroot().iter("Time")]
+
+
+@pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_signal_stops_cleanly_and_resume_ends_bit_for_bit(tmp_path, sig, status):
+    scene = _scene(tmp_path)
+    full, cut = tmp_path / "full", tmp_path / "cut"
+    assert _run(scene, full, 1, "--quiet").returncode == 0
+
+    code, stdout, stderr = _interrupt(scene, cut, sig)
+    name = signal.Signals(sig).name
+    assert code == status, stderr[-2000:]
+    assert "Traceback" not in stderr and f"interrupted by {name}" in stderr
+    assert len([line for line in stderr.splitlines() if line.strip()]) == 1, stderr
+    summary = _summary(cut)
+    assert summary["completed"] is False and summary["interrupted_by"] == name
+    assert summary["error"].startswith(f"interrupted by {name}")
+    steps = summary["steps"]
+    assert 0 < steps < _summary(full)["steps"]
+    # the outputs are readable up to the last step written
+    rows = np.loadtxt(cut / "contact.csv", delimiter=",", skiprows=1)
+    assert rows[:, 0].max() == pytest.approx(summary["final_time"])
+    assert max(_xdmf_times(cut / "signorini_2d.xdmf")) == pytest.approx(summary["final_time"])
+    manifest = json.loads((cut / "checkpoint" / "latest.json").read_text())
+    assert manifest["step"] == steps
+
+    resumed = _run(scene, cut, 1, "--resume", "--quiet")
+    assert resumed.returncode == 0, resumed.stderr[-2000:]
+    for name in ("contact.csv", "reactions.csv"):
+        assert (cut / name).read_bytes() == (full / name).read_bytes(), name
+    a, b = _summary(cut), _summary(full)
+    assert a["resumed_from"]["step"] == steps
+    assert {k: v for k, v in a.items() if k not in TIMING_KEYS} == \
+        {k: v for k, v in b.items() if k not in TIMING_KEYS}
+    assert _xdmf_times(cut / "signorini_2d.xdmf") == _xdmf_times(full / "signorini_2d.xdmf")
+
+
+@pytest.mark.mpi
+def test_sigterm_on_two_ranks_and_resume(tmp_path):
+    scene = _scene(tmp_path, cells=24)
+    full, cut = tmp_path / "full", tmp_path / "cut"
+    assert _run(scene, full, 2, "--quiet").returncode == 0
+    code, _, stderr = _interrupt(scene, cut, signal.SIGTERM, ranks=2)
+    assert code == 143, stderr[-3000:]
+    assert "Traceback" not in stderr
+    summary = _summary(cut)
+    assert summary["interrupted_by"] == "SIGTERM" and summary["mpi_ranks"] == 2
+    resumed = _run(scene, cut, 2, "--resume", "--quiet")
+    assert resumed.returncode == 0, resumed.stderr[-3000:]
+    a = np.loadtxt(cut / "contact.csv", delimiter=",", skiprows=1)
+    b = np.loadtxt(full / "contact.csv", delimiter=",", skiprows=1)
+    assert a.shape == b.shape
+    np.testing.assert_allclose(a[:, :4], b[:, :4], rtol=0, atol=1e-12)
+    np.testing.assert_allclose(a[:, 4], b[:, 4], rtol=0, atol=1e-8 * np.abs(b[:, 4]).max())
+    assert _summary(cut)["newton_iterations"] == _summary(full)["newton_iterations"]
+    # another rank count is refused
+    other = _run(scene, cut, 1, "--resume", "--quiet")
+    assert other.returncode == 2 and "written by 2 MPI rank(s), this run has 1" in other.stderr
+
+
+def test_resume_refusals(tmp_path, capsys):
+    scene = _scene(tmp_path, extra="\n")
+    out = tmp_path / "out"
+    assert cli.main(["run", str(scene), "--out", str(out), "--resume", "--quiet"]) == 2
+    assert "holds no checkpoint" in capsys.readouterr().err
+    assert not (out / "summary.json").exists()
+
+    text = scene.read_text().replace("T = 1.0", "T = 0.2")
+    short = tmp_path / "short.toml"
+    short.write_text(text)
+    assert cli.main(["run", str(short), "--out", str(out), "--quiet"]) == 0
+    short.write_text(text.replace("T = 0.2", "T = 0.3"))  # the scene changed
+    assert cli.main(["run", str(short), "--out", str(out), "--resume", "--quiet"]) == 2
+    assert "the scene changed since the checkpoint" in capsys.readouterr().err
+
+
+def test_a_torn_checkpoint_write_leaves_the_last_one_usable(tmp_path):
+    """A crash while writing (a half-written archive and manifest) does not spoil the previous
+    checkpoint: --resume uses it and ends where an uninterrupted run ends."""
+    scene = _scene(tmp_path)
+    text = scene.read_text().replace("T = 1.0", "T = 0.3")
+    scene.write_text(text)
+    out, full = tmp_path / "out", tmp_path / "full"
+    assert _run(scene, full, 1, "--quiet").returncode == 0
+    assert _run(scene, out, 1, "--quiet").returncode == 0
+    folder = out / "checkpoint"
+    (folder / "step-999999").mkdir()
+    (folder / "step-999999" / "rank-0000.npz").write_bytes(b"PK\x03\x04 torn")
+    (folder / "latest.json.tmp").write_text('{"format": 1, "st')
+    resumed = _run(scene, out, 1, "--resume", "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    assert (out / "contact.csv").read_bytes() == (full / "contact.csv").read_bytes()
+
+
+def test_out_is_an_existing_file(tmp_path, capsys):
+    scene = _scene(tmp_path)
+    target = tmp_path / "result"
+    target.write_text("keep me\n")
+    assert cli.main(["run", str(scene), "--out", str(target), "--quiet"]) == 2
+    assert "an existing file, not a folder" in capsys.readouterr().err
+    assert target.read_text() == "keep me\n"
+    assert cli.main(["run", str(scene), "--out", str(target / "sub"), "--quiet"]) == 2
+    assert "is a file, so no folder can be made there" in capsys.readouterr().err
+
+
+def test_non_finite_expressions_are_reported_before_the_first_step(tmp_path, capsys):
+    base = _scene(tmp_path).read_text()
+    for old, new, expected in (
+            ('body_force = [0.0, "-10*t"]', 'body_force = [0.0, "log(x[0] - 2)"]',
+             r"loads\.body_force\[1\]: 'log\(x\[0\] - 2\)' evaluates to nan at x = \[[-0-9.e]+, "
+             r"[-0-9.e]+\], t = 0"),
+            ('body_force = [0.0, "-10*t"]', 'body_force = [0.0, "1/(t - 0.5)"]',
+             r"loads\.body_force\[1\]: '1/\(t - 0\.5\)' evaluates to inf at t = 0\.5")):
+        assert old in base
+        scene = tmp_path / "bad.toml"
+        scene.write_text(base.replace(old, new))
+        out = tmp_path / "out"
+        assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert re.search(rf"bad\.toml:\d+: {expected}", err), err
+        assert "did not converge" not in err and not out.exists()
+
+
+def test_a_second_run_into_the_same_folder_is_refused(tmp_path, capsys):
+    from mpi4py import MPI
+
+    from vpcontact.output.lock import LOCK_NAME, OutputLock
+    scene = _scene(tmp_path)
+    out = tmp_path / "out"
+    held = OutputLock(out, MPI.COMM_WORLD)  # as a run in progress holds it
+    try:
+        assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert f"another vpcontact run (pid {os.getpid()} on " in err
+        assert not (out / "summary.json").exists()
+    finally:
+        held.release()
+    # a lock file left by a run that died (no process holds the lock) does not block
+    (out / LOCK_NAME).write_text('{"host": "elsewhere", "pid": 1, "started": "yesterday"}\n')
+    small = tmp_path / "short.toml"
+    small.write_text(scene.read_text().replace("T = 1.0", "T = 0.1"))
+    assert cli.main(["run", str(small), "--out", str(out), "--quiet"]) == 0
+    assert not (out / LOCK_NAME).exists()
+
+
+def test_a_full_disk_is_a_clear_error_and_the_record_is_kept(tmp_path, capsys):
+    scene = _scene(tmp_path)
+    scene.write_text(scene.read_text().replace("T = 1.0", "T = 0.1"))
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "contact.csv").symlink_to("/dev/full")  # writes there fail with ENOSPC
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "cannot write the outputs into" in err and "No space left on device" in err
+    assert "Traceback" not in err
+    summary = _summary(out)
+    assert summary["completed"] is False and "No space left on device" in summary["error"]
+    assert summary["steps"] > 0 and (out / "signorini_2d.xdmf").is_file()
