@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""Reading the tables of a parsed scene file into the section dataclasses of :mod:`vpcontact.scene.specs`.
+"""Reading the tables of a parsed scene file into the section dataclasses of
+:mod:`vpcontact.scene.specs`.
 
 Every reader reports what is wrong to a :class:`~vpcontact.scene.schema.Report` and goes on, so
 one pass finds all problems; the values it returns are only used when no problem was found.

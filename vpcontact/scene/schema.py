@@ -334,7 +334,8 @@ class Table:
         items = [None if free and item == "free" else
                  _expression(self.report, join(self.at(key), i), item, names, dim, False)
                  for i, item in enumerate(raw)]
-        bad = [i for i, item in enumerate(items) if item is None and not (free and raw[i] == "free")]
+        bad = [i for i, item in enumerate(items)
+               if item is None and not (free and raw[i] == "free")]
         return None if bad else tuple(items)
 
     def section(self, key: str, keys: Sequence[str], required: bool = False) -> Table:

@@ -25,7 +25,7 @@ from vpcontact.solver.stepping import Cut, StepControl, advance
 from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
                                         rigid_body_modes)
 
-__all__ = ["DEFAULT_OPTIONS", "Cut", "Dirichlet", "DirichletParts", "LaggedDirectSolve", "LaggedMultigrid", "Loads", "PointLoad",
-           "QuasistaticProblem", "StepControl", "StepReport", "StepSolver", "advance",
-           "extrapolation_weights", "milne_factor", "options_in_database", "reason_name",
-           "rigid_body_modes", "tag_facets", "time_split"]
+__all__ = ["DEFAULT_OPTIONS", "Cut", "Dirichlet", "DirichletParts", "LaggedDirectSolve",
+           "LaggedMultigrid", "Loads", "PointLoad", "QuasistaticProblem", "StepControl",
+           "StepReport", "StepSolver", "advance", "extrapolation_weights", "milne_factor",
+           "options_in_database", "reason_name", "rigid_body_modes", "tag_facets", "time_split"]

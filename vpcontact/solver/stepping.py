@@ -77,7 +77,8 @@ def advance(problem: QuasistaticProblem, t_final: float, control: StepControl) -
         raise InputError(f"final time {t_final} must exceed the current time {float(problem.time.value)}")
     # With error control a later call continues with the step proposed last; without, each call
     # starts from the nominal k (a cut then costs only the steps up to the next call's end).
-    dt = (control.next_dt if control.tolerance is not None or control.resume else None) or control.dt
+    continued = control.tolerance is not None or control.resume
+    dt = (control.next_dt if continued else None) or control.dt
     control.resume = False
     if control.tolerance is not None and problem.step_index == 0:
         # no history, no estimate: a first step of √tolerance · k has a small error, and
