@@ -19,6 +19,8 @@ import pytest
 from vpcontact import cli
 from vpcontact import scene as scenes
 
+from mpi_launch import clean_environment
+
 pytestmark = pytest.mark.serial  # each test launches its own processes or writes shared files
 
 TIMING_KEYS = {"wall_time_s", "wall_time_split_s", "resumed_from"}
@@ -33,15 +35,6 @@ def _scene(folder: Path, cells: int = 16, extra: str = "") -> Path:
     return path
 
 
-def _environment():
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
-    for key in ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"):
-        if key in os.environ:
-            env[key] = os.environ[key]
-    env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
-    return env
-
-
 def _command(scene: Path, out: Path, ranks: int, *extra) -> list:
     command = [sys.executable, "-m", "vpcontact", "run", str(scene), "--out", str(out), *extra]
     if ranks == 1:
@@ -52,14 +45,14 @@ def _command(scene: Path, out: Path, ranks: int, *extra) -> list:
 
 def _run(scene, out, ranks=1, *extra) -> subprocess.CompletedProcess:
     return subprocess.run(_command(scene, out, ranks, *extra), capture_output=True, text=True,
-                          timeout=600, env=_environment())
+                          timeout=600, env=clean_environment())
 
 
 def _interrupt(scene: Path, out: Path, sig: int, ranks: int = 1, after: str = "30.0%"):
     """Start a run, send ``sig`` once its progress passes ``after`` (to the ranks themselves,
     as a scheduler does), and return (exit status, stdout, stderr)."""
     process = subprocess.Popen(_command(scene, out, ranks), stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True, env=_environment())
+                               stderr=subprocess.PIPE, text=True, env=clean_environment())
     for line in process.stdout:
         if after in line:
             break

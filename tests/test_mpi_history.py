@@ -13,6 +13,8 @@ import pytest
 from vpcontact.paper import signorini as paper
 from vpcontact.output import runner
 
+from mpi_launch import clean_environment
+
 pytestmark = [pytest.mark.serial, pytest.mark.mpi]
 
 _SCRIPT = textwrap.dedent("""
@@ -33,17 +35,6 @@ def _history(path):
     return data[order]
 
 
-def _clean_environment():
-    # The test process itself is an MPI singleton; its Open MPI/PMIx variables must not leak
-    # into the child mpirun.
-    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
-    for key in ("OMPI_ALLOW_RUN_AS_ROOT", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM"):
-        if key in os.environ:
-            env[key] = os.environ[key]
-    env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
-    return env
-
-
 def _two_rank_run(tmp_path, script_text, args, env):
     """``script_text`` on 2 ranks with ``args``; its standard output."""
     mpirun = shutil.which("mpirun")
@@ -59,7 +50,7 @@ def _two_rank_run(tmp_path, script_text, args, env):
 
 def test_two_ranks_reproduce_the_serial_contact_history(tmp_path):
     parallel_out = tmp_path / "parallel"
-    stdout = _two_rank_run(tmp_path, _SCRIPT, [str(parallel_out)], _clean_environment())
+    stdout = _two_rank_run(tmp_path, _SCRIPT, [str(parallel_out)], clean_environment())
     parallel_its = [int(v) for v in stdout.split("ITERATIONS")[1].split()]
 
     serial_out = tmp_path / "serial"
@@ -100,6 +91,6 @@ def test_two_rank_partitions_repeat(tmp_path):
     # the package keeps PT-Scotch (dolfinx's partitioner) to one thread: its partitions, unlike
     # multithreaded ones (4 different ones in 5 runs of this mesh), are the same in every run;
     # the child gets no setting of its own
-    env = {k: v for k, v in _clean_environment().items() if k != "SCOTCH_PTHREAD_NUMBER"}
+    env = {k: v for k, v in clean_environment().items() if k != "SCOTCH_PTHREAD_NUMBER"}
     runs = [_two_rank_run(tmp_path, _PARTITION, [], env) for _ in range(3)]
     assert "PARTITION" in runs[0] and runs[1] == runs[0] and runs[2] == runs[0], runs

@@ -26,6 +26,7 @@ Geometries (Gmsh's OpenCASCADE kernel, written as .msh on rank 0):
 from __future__ import annotations
 
 import math
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -71,20 +72,32 @@ def _size_field(gmsh, h_contact: float, h_far: float, radius: float) -> None:
         gmsh.option.setNumber(option, 0)
 
 
-def _write(gmsh, path: Path, dim: int) -> None:
-    gmsh.model.mesh.generate(dim)
-    gmsh.write(str(path))
+@contextmanager
+def _gmsh_model(name: str, path: Path, dim: int, comm):
+    """A Gmsh model on rank 0 (None elsewhere), meshed in ``dim`` and written to ``path`` when
+    the block ends; every rank returns once the file is there."""
+    if comm.rank != 0:
+        yield None
+        comm.barrier()
+        return
+    import gmsh
+    gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
+    try:
+        gmsh.model.add(name)
+        yield gmsh
+        gmsh.model.mesh.generate(dim)
+        gmsh.write(str(path))
+    finally:
+        gmsh.finalize()
+        comm.barrier()
 
 
 def cylinder_msh(path: Path, R: float = 1.0, h_contact: float = 0.01,
                  contact_angle: float = math.radians(30.0), refine: float = 0.25,
                  comm=MPI.COMM_WORLD) -> Path:
     """Write the 2-D quarter cylinder (tags: CONTACT arc, FREE arc, TOP, SYMMETRY_X)."""
-    if comm.rank == 0:
-        import gmsh
-        gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
-        try:
-            gmsh.model.add("cylinder")
+    with _gmsh_model("cylinder", path, 2, comm) as gmsh:
+        if gmsh is not None:
             occ = gmsh.model.occ
             centre = occ.addPoint(0.0, R, 0.0)
             bottom = occ.addPoint(0.0, 0.0, 0.0)
@@ -103,10 +116,6 @@ def cylinder_msh(path: Path, R: float = 1.0, h_contact: float = 0.01,
             gmsh.model.addPhysicalGroup(1, [top], TOP)
             gmsh.model.addPhysicalGroup(1, [axis], SYMMETRY_X)
             _size_field(gmsh, h_contact, 0.1 * R, refine * R)
-            _write(gmsh, path, 2)
-        finally:
-            gmsh.finalize()
-    comm.barrier()
     return path
 
 
@@ -114,11 +123,8 @@ def sphere_msh(path: Path, R: float = 1.0, h_contact: float = 0.02,
                contact_angle: float = math.radians(30.0), refine: float = 0.25,
                comm=MPI.COMM_WORLD) -> Path:
     """Write the 3-D quarter half-ball (tags: CONTACT cap, FREE, TOP, SYMMETRY_X, SYMMETRY_Y)."""
-    if comm.rank == 0:
-        import gmsh
-        gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
-        try:
-            gmsh.model.add("sphere")
+    with _gmsh_model("sphere", path, 3, comm) as gmsh:
+        if gmsh is not None:
             occ = gmsh.model.occ
             ball = occ.addSphere(0.0, 0.0, R, R)
             box = occ.addBox(0.0, 0.0, 0.0, R, R, R)
@@ -147,10 +153,6 @@ def sphere_msh(path: Path, R: float = 1.0, h_contact: float = 0.02,
             for group, tags in groups.items():
                 gmsh.model.addPhysicalGroup(2, tags, group)
             _size_field(gmsh, h_contact, 0.15 * R, refine * R)
-            _write(gmsh, path, 3)
-        finally:
-            gmsh.finalize()
-    comm.barrier()
     return path
 
 
@@ -159,19 +161,12 @@ def block_msh(path: Path, L: float = 1.0, H: float = 1.0, h_contact: float = 0.0
     """Write the quarter block [0, L]² × [−H, 0] to be indented at the origin of its top face
     (size h_contact within ``refine`` of the origin, growing to 0.15 L); facet groups by the
     plane they lie on are not needed (tag its parts with :func:`~vpcontact.solver.tag_facets`)."""
-    if comm.rank == 0:
-        import gmsh
-        gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
-        try:
-            gmsh.model.add("block")
+    with _gmsh_model("block", path, 3, comm) as gmsh:
+        if gmsh is not None:
             box = gmsh.model.occ.addBox(0.0, 0.0, -H, L, L, H)
             gmsh.model.occ.synchronize()
             gmsh.model.addPhysicalGroup(3, [box], BODY)
             _size_field(gmsh, h_contact, 0.15 * L, refine)
-            _write(gmsh, path, 3)
-        finally:
-            gmsh.finalize()
-    comm.barrier()
     return path
 
 

@@ -1,0 +1,22 @@
+# SPDX-License-Identifier: MIT
+"""Stage 4, outputs: what a run writes, and the run itself with its record.
+
+Takes a problem (and for :class:`Session` a built scene); gives files in an output folder:
+
+* :mod:`.fields`: cell-averaged stress and von Mises norm (:class:`CellStress`), the XDMF time
+  series (:class:`XdmfSeries`, for ParaView) and the contact history (:class:`ContactHistory`,
+  ``contact.csv``);
+* :mod:`.plots`: PNG figures of the deformed state and the contact history (matplotlib, Agg);
+* :mod:`.runner`: :func:`run`, the time loop that writes these step by step, and its
+  :class:`RunRecord`;
+* :mod:`.session`: :class:`Session`, one simulation of a scene as ``vpcontact run`` does it:
+  progress bar, ``summary.json``, figures.
+"""
+
+from vpcontact.output import plots, runner
+from vpcontact.output.fields import CellStress, ContactHistory, XdmfSeries, von_mises
+from vpcontact.output.runner import RunRecord, print_summary, run
+from vpcontact.output.session import Session
+
+__all__ = ["CellStress", "ContactHistory", "RunRecord", "Session", "XdmfSeries", "plots",
+           "print_summary", "run", "runner", "von_mises"]

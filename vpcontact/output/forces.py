@@ -1,0 +1,111 @@
+# SPDX-License-Identifier: MIT
+"""Support reactions and the contact force over a run: ``reactions.csv`` and ``reactions.png``.
+
+At every recorded time: the force each Dirichlet part exerts on the body (its reaction, summed
+component by component over the part's prescribed dofs) and the total force of the obstacle or
+foundation on Γ3, both from the equilibrium residual (see :mod:`vpcontact.solver.dirichlet`).
+With the applied loads they balance: Σ reactions + contact force + ∫f_0 + ∫f_2 + point loads = 0.
+When a prescribed displacement or an obstacle's translation drives the run, its size is recorded
+too (the "displacement" column), so that force–displacement curves can be plotted as indentation
+and forming tests are.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from vpcontact.output.fields import on_rank0
+
+
+class ForceHistory:
+    """Reactions per Dirichlet part and the contact force of ``problem``, recorded over time."""
+
+    def __init__(self, problem):
+        self.problem = problem
+        self.comm = problem.mesh.comm
+        self.names = [part.name or f"part{i}" for i, part in enumerate(problem.dirichlet.parts)]
+        self.dim = problem.V.dofmap.index_map_bs
+        self.times: list[float] = []
+        self.reactions: list[np.ndarray] = []   # (parts, dim) per time
+        self.contact: list[np.ndarray] = []     # (dim,) per time
+        self.driver: list[Optional[float]] = []  # the driving displacement, if any
+
+    def record(self, t: float) -> None:
+        """Add the forces of the current state (collective)."""
+        reactions, contact = self.problem.support_forces()
+        self.times.append(float(t))
+        self.reactions.append(reactions)
+        self.contact.append(contact)
+        self.driver.append(self.problem.driving_displacement())
+
+    def restore(self, arrays: dict) -> None:
+        """The records of a checkpoint (:mod:`vpcontact.output.checkpoint`)."""
+        self.times = [float(t) for t in arrays["times"]]
+        self.reactions = list(arrays["reactions"])
+        self.contact = list(arrays["contact"])
+        self.driver = [float(d) if driven else None
+                       for d, driven in zip(arrays["driver"], arrays["driven"])]
+
+    def _columns(self) -> list[str]:
+        axes = "xyz"[:self.dim]
+        cols = ["t"] + ([] if self.driver and self.driver[0] is None else ["displacement"])
+        cols += [f"{name}_{a}" for name in self.names for a in axes]
+        return cols + [f"contact_{a}" for a in axes]
+
+    def write_csv(self, path: str | Path) -> None:
+        """One row per recorded time, written by rank 0; on disk when any rank returns."""
+        def write():
+            with open(path, "w") as f:
+                f.write(",".join(self._columns()) + "\n")
+                for t, d, r, c in zip(self.times, self.driver, self.reactions, self.contact):
+                    values = [f"{t:.10g}"] + ([] if d is None else [f"{d:.10e}"])
+                    values += [f"{v:.10e}" for v in np.concatenate([r.ravel(), c])]
+                    f.write(",".join(values) + "\n")
+        on_rank0(self.comm, write)
+
+    def summary(self) -> dict:
+        """The final reactions and contact force, and their histories, for summary.json."""
+        return {
+            "parts": self.names,
+            "final": {name: self.reactions[-1][i].tolist() for i, name in enumerate(self.names)}
+            if self.reactions else {},
+            "contact_force_final": self.contact[-1].tolist() if self.contact else None,
+            "contact_force": [c.tolist() for c in self.contact],
+        }
+
+    def plot(self, path: str | Path, title: str) -> None:
+        """Reactions and contact force against time and, for a driven run, the contact force
+        against the driving displacement (rank 0)."""
+        if self.comm.rank != 0 or not self.times:
+            return
+        from vpcontact.output.plots import _pyplot
+        plt = _pyplot()
+        driven = self.driver[-1] is not None
+        fig, axes = plt.subplots(1, 2 if driven else 1, figsize=(11 if driven else 6, 4.2))
+        axes = np.atleast_1d(axes)
+        t = np.array(self.times)
+        reactions = np.array(self.reactions)
+        contact = np.array(self.contact)
+        for i, name in enumerate(self.names):
+            for a in range(self.dim):
+                if np.any(reactions[:, i, a] != 0):
+                    axes[0].plot(t, reactions[:, i, a], label=f"{name}, {'xyz'[a]}")
+        for a in range(self.dim):
+            if np.any(contact[:, a] != 0):
+                axes[0].plot(t, contact[:, a], "--", label=f"contact, {'xyz'[a]}")
+        axes[0].set(xlabel="t [s]", ylabel="force [N]", title="(a) reactions and contact force")
+        axes[0].legend(fontsize=7)
+        if driven:
+            d = np.array(self.driver, dtype=float)
+            axes[1].plot(d, np.linalg.norm(contact, axis=1), "o-", ms=3)
+            axes[1].set(xlabel="driving displacement [m]", ylabel="|contact force| [N]",
+                        title="(b) contact force against displacement")
+        for ax in axes:
+            ax.grid(alpha=0.3)
+        fig.suptitle(title)
+        fig.tight_layout()
+        fig.savefig(path, dpi=140)
+        plt.close(fig)
