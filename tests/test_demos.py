@@ -5,6 +5,7 @@ import csv
 import importlib.util
 from pathlib import Path
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 
@@ -83,3 +84,17 @@ def test_indentation_relaxation_demo(shared_tmp_path, monkeypatch):
     for name in ("indentation_relaxation.xdmf", "contact.csv", "reactions.csv", "summary.json",
                  "reactions.png", "relaxation.png", "final_state.png"):
         assert (out / name).stat().st_size > 500, name
+
+
+def test_hertz_indentation_demo(shared_tmp_path, monkeypatch):
+    monkeypatch.setenv("CI", "1")
+    demo = _load("hertz_indentation")
+    out = shared_tmp_path / "hertz"
+    rows = demo.run(out)
+    MPI.COMM_WORLD.barrier()
+    depth, force, force_hertz, radius, radius_hertz = rows.T[:5]
+    assert len(rows) == 3 and np.all(np.diff(force) > 0)
+    assert np.all(np.abs(radius / radius_hertz - 1) < 0.1)  # coarse CI mesh: within 10 %
+    assert np.all((force / force_hertz > 1.0) & (force / force_hertz < 1.2))
+    for name in ("force_depth.png", "indentation.csv"):
+        assert (out / name).stat().st_size > 200, name

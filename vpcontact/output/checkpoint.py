@@ -85,14 +85,20 @@ class Checkpointer:
         step = problem.step_index
         name = f"step-{step:06d}"
         target = self.folder / name
-        on_rank0(comm, lambda: target.mkdir(parents=True, exist_ok=True))
+        failure = None
+        try:  # every rank (the folder is usually shared, and then made once)
+            target.mkdir(parents=True, exist_ok=True)
+        except OSError as err:
+            failure = f"rank {comm.rank}: {err}"
+        failure = next((f for f in comm.allgather(failure) if f), None)
+        if failure is not None:
+            raise OSError(f"cannot write the checkpoint: {failure}")
         arrays = dict(arrays)
         if forces is not None:
             arrays.update(forces_arrays(forces))
         if history is not None and comm.rank == 0:
             arrays.update(history_arrays(history))
         path = target / f"rank-{comm.rank:04d}.npz"
-        failure = None
         try:
             tmp = path.with_suffix(".tmp")
             with open(tmp, "wb") as f:
