@@ -57,7 +57,7 @@ def run(out: str | Path = "output/hertz_indentation", depth: float = 0.01,
     """Indent to ``depth`` in ``steps`` steps; write the outputs; return the table's rows."""
     ci = bool(os.environ.get("CI"))
     h_contact = h_contact or (0.02 if ci else 0.01)
-    steps = steps or (3 if ci else 8)
+    steps = steps or (3 if ci else 4)
     out = Path(out)
     comm = MPI.COMM_WORLD
     if comm.rank == 0:
@@ -121,7 +121,7 @@ def main(argv=None) -> int:
     parser.add_argument("--out", default="output/hertz_indentation", help="output folder")
     parser.add_argument("--depth", type=float, default=0.01, help="final depth (default 0.01)")
     parser.add_argument("--h", type=float, help="element size at the contact (default 0.01)")
-    parser.add_argument("--steps", type=int, help="steps (default 8)")
+    parser.add_argument("--steps", type=int, help="steps (default 4)")
     args = parser.parse_args(argv)
     if not 0 < args.depth <= 0.05:
         parser.error("--depth must lie in (0, 0.05] (a small contact against the block)")
