@@ -31,7 +31,7 @@ from vpcontact.output import checkpoint, plots, runner
 from vpcontact.output.fields import ContactHistory, on_rank0
 from vpcontact.output.forces import ForceHistory
 from vpcontact.scene.builder import Model, obstacle_level_set
-from vpcontact.solver.step_solver import time_split
+from vpcontact.solver.snes_options import time_split
 
 
 class Session:

@@ -26,6 +26,7 @@ from vpcontact.errors import InputError
 from vpcontact.solver.loads import Loads, PointLoad
 from vpcontact.solver.problem import QuasistaticProblem
 from vpcontact.scene.files import Scene
+from vpcontact.scene.finite import check_finite
 from vpcontact.scene.specs import ObstacleShape
 from vpcontact.model.obstacle import shape_level_set
 from vpcontact.model.signorini import Signorini, axis_aligned_normal, contact_dofs
@@ -64,7 +65,7 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
         raise scene.error("time.k", f"k = {scene.time.k:g} exceeds the stability limit "
                           f"{limit:.4g} of the explicit scheme (2/L from the law's data); use "
                           "scheme = \"implicit\" or a smaller k")
-    _check_finite(scene, mesh, part_tags, facet_tags)
+    check_finite(scene, mesh, part_tags, facet_tags)
     loads = _loads(scene, part_tags)
     dirichlet = _dirichlet(scene, part_tags, mesh, facet_tags)
     try:
@@ -173,68 +174,6 @@ def _selector(part, extent: float):
         return lambda x: np.all((x[:d] >= lo[:, None] - tol) & (x[:d] <= hi[:, None] + tol), axis=0)
     expr = part.where
     return lambda x: np.asarray(expr.numpy(x), dtype=bool) & np.ones(x.shape[1], dtype=bool)
-
-
-#: Largest number of times at which time-dependent expressions are checked.
-MAX_CHECKED_TIMES = 257
-
-
-def _check_finite(scene: Scene, mesh, part_tags, facet_tags) -> None:
-    """Every expression of the scene finite where and when it is used: loads, tractions,
-    prescribed displacements, gaps and initial values at the vertices they act on, at t = 0 and
-    at the step times (at most MAX_CHECKED_TIMES of them, evenly spread); point forces and an
-    obstacle's motion at those times. The first offender is reported with its place in the
-    scene file, a point and a time, before anything is solved (collective)."""
-    V = fem.FunctionSpace(mesh, ("Lagrange", 1))
-    x_all = V.tabulate_dof_coordinates()[:V.dofmap.index_map.size_local].T
-    fdim = mesh.topology.dim - 1
-
-    def on_part(name):
-        dofs = fem.locate_dofs_topological(V, fdim, facet_tags.find(part_tags[name]))
-        return x_all[:, dofs[dofs < x_all.shape[1]]]
-
-    steps = max(1, int(math.ceil(scene.time.T / scene.time.k - 1e-9)))
-    times = np.unique(np.concatenate([[0.0], np.linspace(0.0, scene.time.T,
-                                                         min(steps, MAX_CHECKED_TIMES - 1) + 1)]))
-    checks = [("loads.body_force", scene.loads.body_force, x_all),
-              ("initial.u0", scene.initial.u0, x_all),
-              ("initial.sigma0", scene.initial.sigma0, x_all)]
-    for name, part in scene.boundaries.items():
-        if part.traction is not None:
-            checks.append((f"boundary.{name}.traction", part.traction, on_part(name)))
-        if part.displacement is not None:
-            checks.append((f"boundary.{name}.displacement", part.displacement, on_part(name)))
-    contact = scene.contact
-    if contact is not None and contact.type != "none" and contact.gap is not None:
-        checks.append(("contact.gap", (contact.gap,), on_part(contact.boundary)))
-    if contact is not None and contact.motion is not None:
-        checks.append(("contact.motion", contact.motion, np.zeros((3, 1))))
-    for i, point in enumerate(scene.loads.point):
-        checks.append((f"loads.point[{i}].force", point.force, np.zeros((3, 1))))
-    found = None
-    for path, exprs, x in checks:
-        for j, e in enumerate(exprs):
-            if e is None or (e.is_constant and np.isfinite(e.value())):
-                continue
-            for t in (times if e.depends_on_time else times[:1]):
-                values = e.numpy(x, t) if x.shape[1] else np.zeros(0)
-                bad = np.flatnonzero(~np.isfinite(values))
-                if len(bad):
-                    key = path if len(exprs) == 1 and path == "contact.gap" else f"{path}[{j}]"
-                    point = ((x[:scene.dim, bad[0]] + 0.0).round(12).tolist()
-                             if "x" in e.names else None)
-                    found = (key, e.source, float(values[bad[0]]), point, float(t))
-                    break
-            if found:
-                break
-        if found:
-            break
-    found = next((f for f in mesh.comm.allgather(found) if f is not None), None)
-    if found is not None:
-        key, source, value, point, t = found
-        where = f"at x = {point}, " if point is not None else "at "
-        raise scene.error(key, f"{source!r} evaluates to {value} {where}t = {t:g}; every "
-                               "expression must be finite wherever and whenever it is used")
 
 
 def _dirichlet(scene: Scene, part_tags, mesh, facet_tags) -> list:

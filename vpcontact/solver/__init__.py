@@ -20,7 +20,8 @@ from vpcontact.solver.dirichlet import Dirichlet, DirichletParts
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor
 from vpcontact.solver.loads import Loads, PointLoad, tag_facets
 from vpcontact.solver.problem import QuasistaticProblem, StepReport
-from vpcontact.solver.step_solver import DEFAULT_OPTIONS, StepSolver, reason_name, time_split
+from vpcontact.solver.snes_options import DEFAULT_OPTIONS, reason_name, time_split
+from vpcontact.solver.step_solver import StepSolver
 from vpcontact.solver.stepping import Cut, StepControl, advance
 from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
                                         rigid_body_modes)

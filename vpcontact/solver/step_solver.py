@@ -1,5 +1,5 @@
 # SPDX-License-Identifier: MIT
-"""One time step as a PETSc SNES solve.
+"""One time step as a PETSc SNES solve (its options and reason names: :mod:`.snes_options`).
 
 :class:`StepSolver` assembles the residual and Jacobian of a dolfinx problem whose coefficients
 must be refreshed before every assembly (here: the quadrature-point stress and tangent, computed
@@ -21,65 +21,10 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.errors import ConvergenceError
+from vpcontact.solver.snes_options import _SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name
 from vpcontact.solver.vi_linear import LaggedDirectSolve, LaggedMultigrid, rigid_body_modes
 
 _counter = itertools.count()
-_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
-
-DEFAULT_OPTIONS = {
-    "snes_type": "newtonls",
-    "snes_linesearch_type": "basic",
-    "snes_rtol": 1e-10,
-    "snes_atol": 1e-11,
-    "snes_stol": 1e-11,  # a relative Newton step this small is at round-off (E ~ 1e8)
-    # Round-off stops (snes_stol) also require ||F|| <= this * max(||F_0||, ||load||): a tiny
-    # step alone may just be a stalled line search.
-    "vpcontact_stall_rtol": 1e-6,
-    # Also converged when ||F|| <= this * ||load||: the residual is then a force imbalance this
-    # small relative to the applied loads (0 disables the test).
-    "vpcontact_force_rtol": 0.0,
-    "snes_max_it": 50,
-    "ksp_type": "preonly",
-    "pc_type": "lu",
-    # Linear solves of SNES VI (vpcontact.solver.vi_linear): "lagged_lu" (GMRES preconditioned by kept
-    # factors of a full-size matrix, refactorized when they stop fitting), "lagged_gamg" (the
-    # same with an algebraic multigrid cycle: for large 3-D meshes), or "petsc" (the ksp_/pc_
-    # options on the reduced matrix, refactorized every iteration: PETSc's own behaviour).
-    # Options of the inner solver go under "lagged_" (e.g. lagged_pc_gamg_threshold).
-    "vpcontact_vi_linear": "lagged_lu",
-    "vpcontact_vi_lag_below": 1e-2,
-}
-if PETSc.Sys.hasExternalPackage("mumps"):
-    DEFAULT_OPTIONS["pc_factor_mat_solver_type"] = "mumps"
-
-
-_SNES_REASON = PETSc.SNES.ConvergedReason
-
-
-def reason_name(reason: int) -> str:
-    """Name of a SNES converged reason, e.g. ``DIVERGED_MAX_IT``."""
-    return _REASONS.get(reason, f"UNKNOWN({reason})")
-
-
-def _forget(prefix: str, keys) -> None:
-    """Remove options this module put into PETSc's database once a solver has read them (the
-    database holds at most 512 entries per process, and solvers are created many times)."""
-    opts = PETSc.Options()
-    for key in keys:
-        if opts.hasName(prefix + key):
-            opts.delValue(prefix + key)
-
-
-def time_split(timings: dict) -> dict:
-    """The parts of a solver's :attr:`timings` [s]: kernels, residual and Jacobian assembly,
-    linear solves (KSPSolve), and the rest of the SNES solves (VI/active-set work: reduced
-    matrices and index sets; line searches and vector work)."""
-    rest = timings["snes"] - timings["kernel"] - timings["residual"] - timings["jacobian"]
-    return {"kernel": timings["kernel"], "residual_assembly": timings["residual"],
-            "jacobian_assembly": timings["jacobian"], "linear_solve": timings["linear_solve"],
-            "vi_and_other_snes": rest - timings["linear_solve"]}
-
-
 class StepSolver:
     """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
 

@@ -26,6 +26,9 @@ the rigid-body modes as near null space) on M instead of its factors: GAMG canno
 VI's reduced matrices (they change size), it can on M. It is an option for meshes too large to
 factorize; on the plastic tangent of the paper's data (stiffness contrast k E/μ* between points)
 GMRES needs hundreds of iterations per solve, so it is not the default.
+
+(About 420 lines: both solvers share the embedding of the reduced systems, ``_ReducedSolve``,
+and are documented together with the construction they share.)
 """
 
 from __future__ import annotations
