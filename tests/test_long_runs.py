@@ -236,3 +236,24 @@ def test_a_full_disk_is_a_clear_error_and_the_record_is_kept(tmp_path, capsys):
     summary = _summary(out)
     assert summary["completed"] is False and "No space left on device" in summary["error"]
     assert summary["steps"] > 0 and (out / "signorini_2d.xdmf").is_file()
+
+
+def test_a_signal_during_set_up_stops_before_the_first_step(tmp_path, monkeypatch, capsys):
+    """SIGINT while the mesh and forms are being built (the JIT compiles on a fresh machine):
+    no step is taken, the run stops at once with a checkpoint at t = 0, and --resume runs it."""
+    from vpcontact.scene import builder
+    build = builder.build
+
+    def build_then_signal(*args, **kwargs):
+        model = build(*args, **kwargs)
+        os.kill(os.getpid(), signal.SIGINT)  # noted by the handler vpcontact run installed
+        return model
+
+    monkeypatch.setattr(builder, "build", build_then_signal)
+    out = tmp_path / "out"
+    assert cli.main(["run", "elastic_2d", "--out", str(out), "--quiet"]) == 130
+    assert "interrupted by SIGINT at t = 0" in capsys.readouterr().err
+    assert _summary(out)["steps"] == 0
+    monkeypatch.setattr(builder, "build", build)
+    assert cli.main(["run", "elastic_2d", "--out", str(out), "--quiet", "--resume"]) == 0
+    assert _summary(out)["completed"] and _summary(out)["steps"] == 4

@@ -107,9 +107,12 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
             history.record(0.0)
         if forces is not None:
             forces.record(0.0)
-    interrupted = None
+    interrupted = stop.agreed(comm) if stop is not None else None  # a signal during set-up
     try:
-        for step in advance(problem, t_final, control):
+        if interrupted and checkpoints is not None:
+            with _timed(record, out):
+                checkpoints.write(record, control, history, forces)
+        for step in advance(problem, t_final, control) if not interrupted else ():
             record.times.append(step.time)
             record.newton_iterations.append(step.newton_iterations)
             record.reasons.append(step.reason)
@@ -138,7 +141,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
             if interrupted:
                 break
         else:
-            record.completed = True
+            record.completed = not interrupted
     finally:
         record.cuts = list(control.cuts)
         with _timed(record, out):
