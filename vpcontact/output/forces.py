@@ -89,12 +89,14 @@ class ForceHistory:
         t = np.array(self.times)
         reactions = np.array(self.reactions)
         contact = np.array(self.contact)
+        # components that are round-off next to the largest force are left out
+        tiny = 1e-9 * max(np.abs(reactions).max(initial=0.0), np.abs(contact).max(initial=0.0))
         for i, name in enumerate(self.names):
             for a in range(self.dim):
-                if np.any(reactions[:, i, a] != 0):
+                if np.abs(reactions[:, i, a]).max() > tiny:
                     axes[0].plot(t, reactions[:, i, a], label=f"{name}, {'xyz'[a]}")
         for a in range(self.dim):
-            if np.any(contact[:, a] != 0):
+            if np.abs(contact[:, a]).max() > tiny:
                 axes[0].plot(t, contact[:, a], "--", label=f"contact, {'xyz'[a]}")
         axes[0].set(xlabel="t [s]", ylabel="force [N]", title="(a) reactions and contact force")
         axes[0].legend(fontsize=7)
