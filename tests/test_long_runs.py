@@ -257,3 +257,32 @@ def test_a_signal_during_set_up_stops_before_the_first_step(tmp_path, monkeypatc
     monkeypatch.setattr(builder, "build", build)
     assert cli.main(["run", "elastic_2d", "--out", str(out), "--quiet", "--resume"]) == 0
     assert _summary(out)["completed"] and _summary(out)["steps"] == 4
+
+
+def test_ctrl_c_still_stops_cleanly_after_gmsh_read_a_mesh(tmp_path):
+    """gmsh's Python module resets SIGINT when imported and again when finalized; a scene on a
+    Gmsh mesh read after gmsh was imported elsewhere still stops cleanly on Ctrl-C."""
+    from vpcontact.studies import hertz
+    hertz.cylinder_msh(tmp_path / "cylinder.msh", h_contact=0.02)
+    (tmp_path / "scene.toml").write_text(
+        'name = "cylinder"\n[mesh]\ntype = "gmsh"\nfile = "cylinder.msh"\ndim = 2\n'
+        '[boundary.top]\nkind = "clamped"\ntag = 2\n[boundary.axis]\nkind = "symmetry"\ntag = 3\n'
+        '[material]\nE = 1.0\nnu = 0.3\n[time]\nT = 1.0\nk = 0.1\n')
+    script = tmp_path / "run.py"
+    script.write_text(
+        "import os, signal, sys\n"
+        "import gmsh  # imported first, as a study driver or another tool might\n"
+        "from vpcontact import cli\n"
+        "from vpcontact.scene import builder\n"
+        "build = builder.build\n"
+        "def build_then_signal(*a, **k):\n"
+        "    model = build(*a, **k)  # reads the mesh in a gmsh session\n"
+        "    os.kill(os.getpid(), signal.SIGINT)\n"
+        "    return model\n"
+        "builder.build = build_then_signal\n"
+        f"sys.exit(cli.main(['run', {str(tmp_path / 'scene.toml')!r}, '--out', "
+        f"{str(tmp_path / 'out')!r}, '--quiet']))\n")
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True,
+                          timeout=300, env=clean_environment())
+    assert done.returncode == 130, done.stderr[-2000:]
+    assert "interrupted by SIGINT" in done.stderr and "Traceback" not in done.stderr

@@ -27,6 +27,7 @@ from vpcontact.solver.loads import Loads, PointLoad
 from vpcontact.solver.problem import QuasistaticProblem
 from vpcontact.scene.files import Scene
 from vpcontact.scene.finite import check_finite
+from vpcontact.scene.gmsh_files import gmsh_session
 from vpcontact.scene.specs import ObstacleShape
 from vpcontact.model.obstacle import shape_level_set
 from vpcontact.model.signorini import Signorini, axis_aligned_normal, contact_dofs
@@ -103,29 +104,23 @@ def _read_gmsh(scene: Scene, comm):
     (dolfinx 0.5's ``gmshio.read_from_msh`` is broken; ``model_to_mesh`` is used directly.) Rank 0
     checks the file first and shares the verdict, so a bad file fails on every rank together.
     """
-    import gmsh
     from dolfinx.io import gmshio
-    problem = None
-    if comm.rank == 0:
-        gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
-        try:
-            gmsh.model.add("scene")
-            gmsh.merge(str(scene.mesh.file))
-            if not gmsh.model.getPhysicalGroups(scene.mesh.dim):
-                problem = (f"the Gmsh file has no physical group of dimension {scene.mesh.dim} "
-                           "(the cells to use)")
-        except Exception as err:  # gmsh raises plain Exceptions for unreadable files
-            problem = f"cannot read the Gmsh file: {err}"
-    problem = comm.bcast(problem, root=0)
-    if problem is not None:
-        if comm.rank == 0:
-            gmsh.finalize()
-        raise scene.error("mesh.file", problem)
-    try:
-        mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=scene.mesh.dim)
-    finally:
-        if comm.rank == 0:
-            gmsh.finalize()
+    with gmsh_session(comm) as gmsh:
+        problem = None
+        if gmsh is not None:
+            try:
+                gmsh.model.add("scene")
+                gmsh.merge(str(scene.mesh.file))
+                if not gmsh.model.getPhysicalGroups(scene.mesh.dim):
+                    problem = (f"the Gmsh file has no physical group of dimension "
+                               f"{scene.mesh.dim} (the cells to use)")
+            except Exception as err:  # gmsh raises plain Exceptions for unreadable files
+                problem = f"cannot read the Gmsh file: {err}"
+        problem = comm.bcast(problem, root=0)
+        if problem is not None:
+            raise scene.error("mesh.file", problem)
+        mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model if gmsh is not None else None,
+                                                   comm, 0, gdim=scene.mesh.dim)
     return mesh, facet_tags
 
 

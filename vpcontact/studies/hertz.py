@@ -33,6 +33,8 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from vpcontact.scene.gmsh_files import gmsh_session
+
 #: Physical tags of the generated meshes.
 BODY, CONTACT, TOP, SYMMETRY_X, SYMMETRY_Y, FREE = 1, 1, 2, 3, 4, 5
 
@@ -76,19 +78,15 @@ def _size_field(gmsh, h_contact: float, h_far: float, radius: float) -> None:
 def _gmsh_model(name: str, path: Path, dim: int, comm):
     """A Gmsh model on rank 0 (None elsewhere), meshed in ``dim`` and written to ``path`` when
     the block ends; every rank returns once the file is there."""
-    if comm.rank != 0:
-        yield None
-        comm.barrier()
-        return
-    import gmsh
-    gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
     try:
-        gmsh.model.add(name)
-        yield gmsh
-        gmsh.model.mesh.generate(dim)
-        gmsh.write(str(path))
+        with gmsh_session(comm) as gmsh:
+            if gmsh is not None:
+                gmsh.model.add(name)
+            yield gmsh
+            if gmsh is not None:
+                gmsh.model.mesh.generate(dim)
+                gmsh.write(str(path))
     finally:
-        gmsh.finalize()
         comm.barrier()
 
 
@@ -172,16 +170,12 @@ def block_msh(path: Path, L: float = 1.0, H: float = 1.0, h_contact: float = 0.0
 
 def read_msh(path: Path, dim: int, comm=MPI.COMM_WORLD):
     """(mesh, facet tags) of a .msh file written by this module."""
-    import gmsh
     from dolfinx.io import gmshio
-    if comm.rank == 0:
-        gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
-        gmsh.merge(str(path))
-    try:
-        mesh, _, facets = gmshio.model_to_mesh(gmsh.model, comm, 0, gdim=dim)
-    finally:
-        if comm.rank == 0:
-            gmsh.finalize()
+    with gmsh_session(comm) as gmsh:
+        if gmsh is not None:
+            gmsh.merge(str(path))
+        mesh, _, facets = gmshio.model_to_mesh(gmsh.model if gmsh is not None else None, comm,
+                                               0, gdim=dim)
     return mesh, facets
 
 
