@@ -23,7 +23,6 @@ writes bench/results/contact_frames.json (and prints it).
 from __future__ import annotations
 
 import argparse
-import logging
 import math
 import sys
 import time
@@ -34,6 +33,7 @@ import ufl
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
+from vpcontact.cli import configure_logging
 from benchlib import machine, save
 from vpcontact.model import Elasticity, Perzyna, Signorini
 from vpcontact.solver import Loads, QuasistaticProblem, StepControl, advance, tag_facets, time_split
@@ -120,5 +120,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    logging.getLogger().setLevel(logging.WARNING)
+    configure_logging()  # JIT messages off the terminal
     sys.exit(main())

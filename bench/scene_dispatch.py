@@ -19,7 +19,6 @@ writes bench/results/scene_dispatch.json (and prints it).
 from __future__ import annotations
 
 import argparse
-import logging
 import re
 import sys
 import tempfile
@@ -32,6 +31,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
+from vpcontact.cli import configure_logging
 from benchlib import machine, save
 from vpcontact import scene as scenes
 from vpcontact.scene import build
@@ -128,5 +128,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    logging.getLogger().setLevel(logging.WARNING)
+    configure_logging()  # JIT messages off the terminal
     sys.exit(main())

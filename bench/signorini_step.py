@@ -20,7 +20,6 @@ writes bench/results/signorini_step.json (and prints it).
 from __future__ import annotations
 
 import argparse
-import logging
 import sys
 import time
 from pathlib import Path
@@ -32,6 +31,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
+from vpcontact.cli import configure_logging
 from benchlib import machine, save
 from vpcontact.paper import signorini as paper
 from vpcontact.solver import DEFAULT_OPTIONS, time_split
@@ -137,5 +137,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    logging.getLogger().setLevel(logging.WARNING)
+    configure_logging()  # JIT messages off the terminal
     sys.exit(main())

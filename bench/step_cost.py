@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import logging
 import os
 import resource
 import shutil
@@ -41,6 +40,7 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+from vpcontact.cli import configure_logging
 from benchlib import machine, save
 
 WINDOWS = {2: (0.4, 0.5), 3: (0.3, 0.4)}  # timed interval per dimension [s]
@@ -204,5 +204,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    logging.getLogger().setLevel(logging.WARNING)
+    configure_logging()  # JIT messages off the terminal
     sys.exit(main())

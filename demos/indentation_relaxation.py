@@ -116,8 +116,8 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    import logging
-    logging.getLogger().setLevel(logging.WARNING)
+    from vpcontact.cli import configure_logging
+    configure_logging()  # JIT messages off the terminal
     from vpcontact.errors import VpcontactError
     try:
         sys.exit(main())

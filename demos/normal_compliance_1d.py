@@ -193,6 +193,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    import logging
-    logging.getLogger().setLevel(logging.WARNING)  # silence the form compiler's INFO chatter
+    from vpcontact.cli import configure_logging
+    configure_logging()  # JIT messages off the terminal
     sys.exit(main())

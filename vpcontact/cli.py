@@ -33,7 +33,7 @@ from vpcontact.errors import (ConvergenceError, InputError, Interrupted, NonFini
 def main(argv: Optional[list] = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
-    _logging(getattr(args, "verbose", False))
+    configure_logging(getattr(args, "verbose", False))
     if args.command is None:
         parser.print_help()
         return 2
@@ -59,9 +59,9 @@ def main(argv: Optional[list] = None) -> int:
         return 2
 
 
-def _logging(verbose: bool) -> None:
+def configure_logging(verbose: bool = False) -> None:
     """Keep the form compiler's JIT messages (logged at INFO on a fresh machine) off the terminal
-    unless ``-v``. distutils resets the root logger's level to INFO at every JIT build, so the
+    unless ``verbose`` (``-v``); demos and benchmarks call it too. distutils resets the root logger's level to INFO at every JIT build, so the
     level is set on the root handler, which nothing else touches."""
     logging.basicConfig()  # the root handler (FFCx's own basicConfig() is then a no-op)
     level = logging.INFO if verbose else logging.WARNING
