@@ -164,6 +164,20 @@ def test_bad_dirichlet_parts_are_located(shared_tmp_path, capsys, old, new, matc
      r"contact part"),
     ('center = [0.0, 0.5]', 'center = [0.0, 0.3]',
      r"contact\.obstacle: contact point .* starts inside the obstacle"),
+    ('motion = [0, "-0.02*t"]', 'rotation = { center = [0.0, 0.4] }',
+     r"contact\.rotation\.angle: missing required key"),
+    ('motion = [0, "-0.02*t"]', 'rotation = { center = [0.0, 0.4], angle = "t", axis = [0, 0, 1] }',
+     r"contact\.rotation\.axis: not allowed: a 2-D rotation is about the point 'center'"),
+    ('motion = [0, "-0.02*t"]', 'rotation = { center = [0.0], angle = "t" }',
+     r"contact\.rotation\.center: expected 2 numbers, got 1"),
+    ('motion = [0, "-0.02*t"]', 'rotation = { center = [0.0, 0.4], angle = "x[0]" }',
+     r"contact\.rotation\.angle: invalid expression"),
+    ('motion = [0, "-0.02*t"]', 'rotation = { center = [0.0, 0.4], angle = "log(t - 1)" }',
+     r"contact\.rotation\.angle: 'log\(t - 1\)' evaluates to nan at t = 0"),
+    ('motion = [0, "-0.02*t"]', 'rotation = { centre = [0.0, 0.4], angle = "t" }',
+     r"contact\.rotation\.centre: unknown key"),
+    ('type = "signorini"', 'type = "normal_compliance"\nmu = 1.0\nrotation = { center = [0, 0], angle = 1 }',
+     r"contact\.rotation: not allowed: a foundation surface stays where it is"),
 ])
 def test_bad_obstacles_are_located(shared_tmp_path, capsys, old, new, match):
     assert old in INDENTATION
@@ -188,6 +202,42 @@ def test_show_writes_the_new_keys_back(shared_tmp_path, capsys):
     text = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:
         assert 'displacement = ["free", "-0.01*t"]' in text
+
+
+def test_turning_obstacle_is_the_same_motion_as_its_translation(shared_tmp_path):
+    """A circle turned about a point off its centre moves as the translation of its centre: the
+    runs with ``rotation`` and with the equivalent ``motion`` give the same contact forces and
+    gaps (to the bisection's round-off), and the obstacle pushes the block down and sideways."""
+    turned = INDENTATION.replace('motion = [0, "-0.02*t"]',
+                                 'rotation = { center = [0.0, 0.38], angle = "0.6*t" }')
+    # centre (0, 0.5) turned by θ about (0, 0.38): d(θ) = (-0.12 sin θ, 0.12 cos θ - 0.12)
+    moved = INDENTATION.replace('motion = [0, "-0.02*t"]',
+                                'motion = ["-0.12*sin(0.6*t)", "0.12*cos(0.6*t) - 0.12"]')
+    results = {}
+    for name, text in (("turned", turned), ("moved", moved)):
+        out = shared_tmp_path / name
+        scene = _write(shared_tmp_path / f"{name}.toml", text)
+        assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+        header, rows = _csv(out / "reactions.csv")
+        contact = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
+        results[name] = (rows[:, [header.index("contact_x"), header.index("contact_y")]],
+                         contact)
+    (f_turned, c_turned), (f_moved, c_moved) = results["turned"], results["moved"]
+    assert np.allclose(f_turned, f_moved, rtol=1e-8, atol=1e-10 * np.abs(f_moved).max())
+    assert np.allclose(c_turned[:, :6], c_moved[:, :6], rtol=1e-8, atol=1e-11)
+    assert -f_moved[-1, 1] > 0 and f_moved[-1, 0] != 0.0  # pushed down, and sideways
+
+
+def test_show_writes_a_rotation_back(shared_tmp_path, capsys):
+    text = INDENTATION.replace('motion = [0, "-0.02*t"]',
+                               'rotation = { center = [0.0, 0.38], angle = "0.6*t" }')
+    scene = _write(shared_tmp_path / "turned.toml", text)
+    assert cli.main(["show", str(scene)]) == 0
+    shown = capsys.readouterr().out
+    if MPI.COMM_WORLD.rank == 0:
+        assert 'rotation = { center = [0.0, 0.38], angle = "0.6*t" }' in shown
+    again = _write(shared_tmp_path / "again.toml", shown if MPI.COMM_WORLD.rank == 0 else "")
+    assert cli.main(["validate", str(again)]) == 0
 
 
 CYLINDER = """\

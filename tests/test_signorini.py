@@ -11,7 +11,8 @@ from mpi4py import MPI
 from vpcontact.paper import signorini as paper
 from vpcontact.output import runner
 from vpcontact.errors import InputError
-from vpcontact.model import gap_along_normal
+from vpcontact.model import Signorini, gap_along_normal, rotation_matrix
+from vpcontact.model.obstacle import shape_level_set
 from vpcontact.solver import tag_facets
 
 
@@ -47,6 +48,44 @@ def test_obstacle_gap_matches_closed_form():
     gap = gap_along_normal(paper.obstacle_2d, points, np.array([0.0, -1.0, 0.0]), max_distance=10.0)
     exact = 3.0 - 3.0 * np.sqrt(1.0 - (x1 - 3.0) ** 2 / 900.0)
     np.testing.assert_allclose(gap, exact, rtol=1e-12, atol=1e-15)
+
+
+def test_rotation_matrix_is_the_turn_about_its_axis():
+    q = rotation_matrix([1.0, 1.0, 1.0], 2.0 * np.pi / 3.0)  # a third of a turn about (1,1,1)
+    np.testing.assert_allclose(q, np.roll(np.eye(3), 1, axis=0), atol=1e-15)  # x → y → z → x
+    q = rotation_matrix([0.2, -0.7, 0.4], 1.1)
+    np.testing.assert_allclose(q.T @ q, np.eye(3), atol=1e-15)
+    assert np.linalg.det(q) == pytest.approx(1.0, abs=1e-14)
+    np.testing.assert_allclose(q @ [0.2, -0.7, 0.4], [0.2, -0.7, 0.4], atol=1e-15)
+
+
+def test_turned_obstacle_in_3d_is_the_turned_shape():
+    """An ellipsoid turned by a quarter turn about the z axis through its centre is the ellipsoid
+    with its x and y semi-axes swapped; turned about an axis through another point, its centre
+    moves as that point's rotation says. Gaps along the normal agree to round-off."""
+    rng = np.random.default_rng(3)
+    points = np.c_[rng.uniform(-0.15, 0.35, 40), rng.uniform(-0.25, 0.25, 40), np.zeros(40)]
+    up = np.array([0.0, 0.0, 1.0])
+    ellipsoid = {"center": (0.1, 0.0, 0.6), "semi_axes": (0.3, 0.5, 0.4)}
+    phi = shape_level_set("ellipsoid", ellipsoid, 3)
+    about_centre = Signorini(1, obstacle=phi, rotation_center=(0.1, 0.0, 0.6),
+                             rotation=lambda t: rotation_matrix([0.0, 0.0, 1.0], t * np.pi / 2))
+    swapped = shape_level_set("ellipsoid", {"center": (0.1, 0.0, 0.6),
+                                            "semi_axes": (0.5, 0.3, 0.4)}, 3)
+    expected = gap_along_normal(swapped, points, up, max_distance=5.0)
+    got = gap_along_normal(about_centre.obstacle_at(1.0), points, up, max_distance=5.0)
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-14)
+    # a half turn about the x axis through (0.1, 0, 1): the centre goes to (0.1, 0, 1.4), and
+    # an ellipsoid is symmetric under that half turn about its own centre
+    about_x = Signorini(1, obstacle=phi, rotation_center=(0.1, 0.0, 1.0),
+                        rotation=lambda t: rotation_matrix([1.0, 0.0, 0.0], t * np.pi),
+                        translation=lambda t: np.array([0.0, 0.0, -0.3 * t]))
+    raised = shape_level_set("ellipsoid", {"center": (0.1, 0.0, 1.1),
+                                           "semi_axes": (0.3, 0.5, 0.4)}, 3)
+    expected = gap_along_normal(raised, points, up, max_distance=5.0)
+    got = gap_along_normal(about_x.obstacle_at(1.0), points, up, max_distance=5.0)
+    np.testing.assert_allclose(got, expected, rtol=1e-12, atol=1e-14)
+    assert about_x.moving and not Signorini(1, obstacle=phi).moving
 
 
 def test_missed_obstacle_and_initial_penetration_are_reported():

@@ -11,16 +11,16 @@ Takes material data, boundary tags and contact data; gives the pieces the solver
 * contact conditions on Γ3: :mod:`.normal_compliance` (a deformable foundation, a UFL boundary
   term) and :mod:`.signorini` (a rigid one: bounds of a variational inequality, the contact
   dofs, the monitor of the contact pressure), with rigid obstacles as level sets
-  (:mod:`.obstacle`).
+  that may translate and turn (:mod:`.obstacle`).
 """
 
 from vpcontact.model.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
 from vpcontact.model.normal_compliance import NormalCompliance
-from vpcontact.model.obstacle import LevelSet, gap_along_normal
+from vpcontact.model.obstacle import LevelSet, gap_along_normal, rotation_matrix
 from vpcontact.model.quadrature import QuadratureState
 from vpcontact.model.signorini import (ContactDofs, ContactMonitor, ContactReport, Signorini,
                                        contact_dofs, variable_bounds)
 
 __all__ = ["ContactDofs", "ContactMonitor", "ContactReport", "Elastic", "Elasticity", "LevelSet",
            "LinearRate", "NormalCompliance", "Perzyna", "PlaneStrain", "QuadratureState",
-           "Signorini", "contact_dofs", "gap_along_normal", "variable_bounds"]
+           "Signorini", "contact_dofs", "gap_along_normal", "rotation_matrix", "variable_bounds"]

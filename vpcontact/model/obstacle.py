@@ -9,6 +9,7 @@ geometric marching (to bracket the first sign change) followed by bisection to m
 
 from __future__ import annotations
 
+import math
 from typing import Callable
 
 import numpy as np
@@ -137,3 +138,12 @@ def shape_level_set(shape: str, params: dict, dim: int) -> LevelSet:
         s = np.asarray(params["semi_axes"], dtype=np.float64)[:, None]
         return lambda x: s.min() * (np.linalg.norm((coords(x) - c) / s, axis=0) - 1.0)
     raise InputError(f"unknown obstacle shape {shape!r}")
+
+
+def rotation_matrix(axis, angle: float) -> np.ndarray:
+    """The rotation by ``angle`` (radians, right-handed) about the unit vector along ``axis``
+    (Rodrigues' formula), a (3, 3) orthogonal matrix; ``axis`` (0, 0, 1) is the 2-D rotation."""
+    a = np.asarray(axis, dtype=np.float64).reshape(3)
+    a = a / np.linalg.norm(a)
+    k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
+    return np.eye(3) + math.sin(angle) * k + (1.0 - math.cos(angle)) * (k @ k)

@@ -44,6 +44,10 @@ class Signorini:
         obstacle_moves: φ depends on t (the gap is recomputed at every step).
         translation: rigid translation d(t) of the obstacle (t -> (3,) array): the obstacle at t is
             {x : φ(x - d(t)) ≤ 0}; None: it stays where φ puts it.
+        rotation: rigid rotation Q(t) of the obstacle about ``rotation_center`` c (t -> (3, 3)
+            orthogonal matrix), applied before the translation: the obstacle at t is
+            {x : φ(c + Q(t)ᵀ(x − c − d(t))) ≤ 0}; None: it does not turn.
+        rotation_center: the point c the rotation turns about (3 coordinates).
     """
 
     tag: int
@@ -52,6 +56,8 @@ class Signorini:
     max_distance: float = 1e3
     obstacle_moves: bool = False
     translation: Optional[Callable[[float], np.ndarray]] = None
+    rotation: Optional[Callable[[float], np.ndarray]] = None
+    rotation_center: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self):
         if isinstance(self.gap, (int, float)) and not (math.isfinite(self.gap) and self.gap >= 0):
@@ -60,18 +66,24 @@ class Signorini:
     @property
     def moving(self) -> bool:
         """Whether the gap changes with time."""
-        return self.obstacle is not None and (self.obstacle_moves or self.translation is not None)
+        return self.obstacle is not None and (self.obstacle_moves or self.translation is not None
+                                              or self.rotation is not None)
 
     def obstacle_at(self, time: float) -> LevelSet:
         """The obstacle's level set at ``time``, as a function of points (3, N)."""
         phi = self.obstacle
         at_t = (lambda x: phi(x, time)) if self.obstacle_moves else phi
-        if self.translation is None:
+        if self.translation is None and self.rotation is None:
             return at_t
         d = np.zeros(3)
-        shift = np.asarray(self.translation(time), dtype=np.float64).reshape(-1)
-        d[:len(shift)] = shift
-        return lambda x: at_t(x - d[:, None])
+        if self.translation is not None:
+            shift = np.asarray(self.translation(time), dtype=np.float64).reshape(-1)
+            d[:len(shift)] = shift
+        if self.rotation is None:
+            return lambda x: at_t(x - d[:, None])
+        q = np.asarray(self.rotation(time), dtype=np.float64).reshape(3, 3)
+        c = np.asarray(self.rotation_center, dtype=np.float64).reshape(3, 1)
+        return lambda x: at_t(c + q.T @ (np.asarray(x, dtype=np.float64) - c - d[:, None]))
 
 
 @dataclass

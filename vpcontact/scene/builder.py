@@ -29,7 +29,7 @@ from vpcontact.scene.files import Scene
 from vpcontact.scene.finite import check_finite
 from vpcontact.scene.gmsh_files import gmsh_session
 from vpcontact.scene.specs import ObstacleShape
-from vpcontact.model.obstacle import shape_level_set
+from vpcontact.model.obstacle import rotation_matrix, shape_level_set
 from vpcontact.model.signorini import Signorini, axis_aligned_normal, contact_dofs
 from vpcontact.solver.dirichlet import Dirichlet
 
@@ -278,8 +278,13 @@ def _contact(scene: Scene, part_tags, mesh, facet_tags):
         translation = (None if motion is None or all(e.is_constant and e.value() == 0.0
                                                        for e in motion)
                        else (lambda t: np.array([e.value(t) for e in motion])))
+        turn = spec.rotation
+        rotation = (None if turn is None else
+                    (lambda t: rotation_matrix(turn.axis or (0.0, 0.0, 1.0), turn.angle.value(t))))
+        center = (0.0,) * 3 if turn is None else turn.center + (0.0,) * (3 - len(turn.center))
         return Signorini(tag, obstacle=phi, max_distance=spec.max_distance or 1e3,
-                         obstacle_moves=moves, translation=translation), tag
+                         obstacle_moves=moves, translation=translation, rotation=rotation,
+                         rotation_center=center), tag
     if gap is None or gap.is_constant:
         return Signorini(tag, gap=0.0 if gap is None else gap.value()), tag
     return Signorini(tag, gap=lambda x: gap.numpy(x)), tag

@@ -20,7 +20,7 @@ def check_finite(scene: Scene, mesh, part_tags, facet_tags) -> None:
     """Every expression of the scene finite where and when it is used: loads, tractions,
     prescribed displacements, gaps and initial values at the vertices they act on, at t = 0 and
     at the step times (at most MAX_CHECKED_TIMES of them, evenly spread); point forces and an
-    obstacle's motion at those times. The first offender is reported with its place in the
+    obstacle's motion and rotation at those times. The first offender is reported with its place in the
     scene file, a point and a time, before anything is solved (collective)."""
     V = fem.FunctionSpace(mesh, ("Lagrange", 1))
     x_all = V.tabulate_dof_coordinates()[:V.dofmap.index_map.size_local].T
@@ -46,6 +46,8 @@ def check_finite(scene: Scene, mesh, part_tags, facet_tags) -> None:
         checks.append(("contact.gap", (contact.gap,), on_part(contact.boundary)))
     if contact is not None and contact.motion is not None:
         checks.append(("contact.motion", contact.motion, np.zeros((3, 1))))
+    if contact is not None and contact.rotation is not None:
+        checks.append(("contact.rotation.angle", (contact.rotation.angle,), np.zeros((3, 1))))
     for i, point in enumerate(scene.loads.point):
         checks.append((f"loads.point[{i}].force", point.force, np.zeros((3, 1))))
     found = None
@@ -57,7 +59,8 @@ def check_finite(scene: Scene, mesh, part_tags, facet_tags) -> None:
                 values = e.numpy(x, t) if x.shape[1] else np.zeros(0)
                 bad = np.flatnonzero(~np.isfinite(values))
                 if len(bad):
-                    key = path if len(exprs) == 1 and path == "contact.gap" else f"{path}[{j}]"
+                    key = (path if len(exprs) == 1 and path in ("contact.gap", "contact.rotation.angle")
+                           else f"{path}[{j}]")
                     point = ((x[:scene.dim, bad[0]] + 0.0).round(12).tolist()
                              if "x" in e.names else None)
                     found = (key, e.source, float(values[bad[0]]), point, float(t))

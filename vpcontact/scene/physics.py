@@ -12,12 +12,14 @@ from __future__ import annotations
 from vpcontact.scene.expressions import Expression
 from vpcontact.scene.schema import Check, Table, at_least, between, constant_value, greater
 from vpcontact.scene.locate import join
-from vpcontact.scene.specs import SHAPES, ContactSpec, LawSpec, ObstacleShape
+from vpcontact.scene.specs import SHAPES, ContactSpec, LawSpec, ObstacleRotation, ObstacleShape
 
 __all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contact", "read_law"]
 
 LAW_KEYS = ("type", "scheme", "sigma_y", "mu_star", "yield_set", "a", "b")
-CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "motion", "max_distance", "mu", "alpha")
+CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "motion", "rotation", "max_distance", "mu",
+                "alpha")
+ROTATION_KEYS = ("center", "angle", "axis")
 LAW_TYPES = ("elastic", "perzyna", "linear")
 SCHEMES = ("explicit", "implicit")
 DEFAULT_SCHEME = {"elastic": "explicit", "perzyna": "implicit", "linear": "explicit"}
@@ -90,12 +92,14 @@ def read_contact(top: Table, dim: int | None) -> ContactSpec | None:
         if t.has("gap"):
             t.add("gap", "give either gap or obstacle, not both")
         if kind == "normal_compliance":
-            t.forbid("motion", "a foundation surface stays where it is (moving obstacles are "
-                               "for type = 'signorini')")
+            for key in ("motion", "rotation"):
+                t.forbid(key, "a foundation surface stays where it is (moving obstacles are "
+                              "for type = 'signorini')")
         obstacle = _obstacle(t, dim, moving=kind == "signorini")
-        motion = (t.exprs("motion", ("t",), dim, dim) if t.has("motion") and kind == "signorini"
-                  else None)
-        return ContactSpec(kind, boundary, obstacle=obstacle, motion=motion,
+        moves = kind == "signorini"
+        motion = t.exprs("motion", ("t",), dim, dim) if t.has("motion") and moves else None
+        rotation = _rotation(t, dim) if t.has("rotation") and moves else None
+        return ContactSpec(kind, boundary, obstacle=obstacle, motion=motion, rotation=rotation,
                            max_distance=t.number("max_distance", DEFAULT_MAX_DISTANCE,
                                                  check=greater(0)),
                            mu=t.number("mu", check=greater(0)) if kind != "signorini" else None,
@@ -103,6 +107,7 @@ def read_contact(top: Table, dim: int | None) -> ContactSpec | None:
                                   if kind != "signorini" else None))
     t.forbid("max_distance", "only with an obstacle")
     t.forbid("motion", "only with an obstacle")
+    t.forbid("rotation", "only with an obstacle")
     if kind == "signorini":
         return ContactSpec(kind, boundary, gap=_gap(t, dim))
     return ContactSpec(kind, boundary, gap=_gap(t, dim), mu=t.number("mu", check=greater(0)),
@@ -142,6 +147,31 @@ def _obstacle(t: Table, dim: int | None, moving: bool) -> Expression | ObstacleS
             return None
         params.append((key, value))
     return ObstacleShape(shape, tuple(params))
+
+
+def _rotation(t: Table, dim: int | None) -> ObstacleRotation | None:
+    """``rotation = { center = [...], angle = "expr of t", axis = [...] }`` (``axis`` in 3-D
+    only: a 2-D rotation is about the point ``center``, counter-clockwise)."""
+    if dim == 1:
+        t.add("rotation", "a 1-D obstacle cannot rotate (use motion)")
+        return None
+    r = t.table("rotation", ROTATION_KEYS)
+    if r is None:
+        return None
+    center = r.numbers("center", dim)
+    angle = r.expr("angle", ("t",), dim)
+    axis = None
+    if dim == 2:
+        r.forbid("axis", "a 2-D rotation is about the point 'center' (in the plane)")
+    elif dim == 3:
+        axis = r.numbers("axis", 3)
+        if axis is not None and not any(axis):
+            r.add("axis", "must not be the zero vector")
+        if axis is None or not any(axis):
+            return None
+    if center is None or angle is None:
+        return None
+    return ObstacleRotation(tuple(center), angle, None if axis is None else tuple(axis))
 
 
 def _gap(t: Table, dim: int | None) -> Expression | None:

@@ -14,8 +14,9 @@ from pathlib import Path
 from vpcontact.scene.expressions import Expression
 
 __all__ = ["BoundaryPart", "BoxSelector", "ContactSpec", "InitialSpec", "LawSpec", "LoadSpec",
-           "MaterialSpec", "MeshSpec", "ObstacleShape", "OutputSpec", "PlaneSelector", "PointLoad",
-           "SolverSpec", "TimeSpec", "BUILTIN_MESHES", "CELL_TYPES", "DIAGONALS", "SHAPES"]
+           "MaterialSpec", "MeshSpec", "ObstacleRotation", "ObstacleShape", "OutputSpec",
+           "PlaneSelector", "PointLoad", "SolverSpec", "TimeSpec", "BUILTIN_MESHES", "CELL_TYPES",
+           "DIAGONALS", "SHAPES"]
 
 #: Time schemes of the constitutive law (``[time] scheme``).
 TIME_SCHEMES = ("euler", "bdf2")
@@ -180,6 +181,18 @@ class ObstacleShape:
 
 
 @dataclass(frozen=True)
+class ObstacleRotation:
+    """A rigid rotation of the obstacle by ``angle``(t) (radians, right-handed) about the line
+    through ``center`` along ``axis`` (3-D; in 2-D about the point ``center``, counter-clockwise),
+    applied before ``motion``'s translation: the obstacle at t is {c + d(t) + Q(t)(y − c)} for
+    y in the obstacle at rest."""
+
+    center: tuple[float, ...]
+    angle: Expression
+    axis: tuple[float, ...] | None = None
+
+
+@dataclass(frozen=True)
 class ContactSpec:
     """``[contact]``: the contact condition on the part named ``boundary``.
 
@@ -192,6 +205,7 @@ class ContactSpec:
             ``None``.
         motion: rigid translation d(t) of the obstacle (one expression of t per component), or
             ``None``.
+        rotation: rigid rotation of the obstacle (:class:`ObstacleRotation`), or ``None``.
         max_distance: longest ray searched for the obstacle (with an obstacle only).
         mu: deformability μ of the foundation (normal compliance only).
         alpha: exponent α of normal compliance (normal compliance only).
@@ -202,6 +216,7 @@ class ContactSpec:
     gap: Expression | None = None
     obstacle: Expression | ObstacleShape | None = None
     motion: tuple[Expression, ...] | None = None
+    rotation: ObstacleRotation | None = None
     max_distance: float | None = None
     mu: float | None = None
     alpha: float | None = None

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from vpcontact.scene.expressions import Expression, ExpressionError, parse
-from vpcontact.scene.specs import BoxSelector, ObstacleShape, PlaneSelector
+from vpcontact.scene.specs import BoxSelector, ObstacleRotation, ObstacleShape, PlaneSelector
 
 __all__ = ["dump", "key", "value"]
 
@@ -75,6 +75,9 @@ def value(item: Any) -> str:
         return value({"lower": item.lower, "upper": item.upper})
     if isinstance(item, ObstacleShape):
         return value({"shape": item.shape, **dict(item.params)})
+    if isinstance(item, ObstacleRotation):
+        entries = {"center": item.center, "angle": item.angle, "axis": item.axis}
+        return value({k: v for k, v in entries.items() if v is not None})
     if item is None:
         return '"free"'  # a free component of a prescribed displacement
     if isinstance(item, dict):
@@ -117,6 +120,7 @@ def dump(scene: Any) -> str:
         blocks += _table("contact", {
             "type": contact.type, "boundary": contact.boundary, "gap": contact.gap,
             "obstacle": contact.obstacle, "motion": contact.motion,
+            "rotation": contact.rotation,
             "max_distance": contact.max_distance, "mu": contact.mu,
             "alpha": contact.alpha})
     blocks += _table("initial", {"u0": scene.initial.u0, "sigma0": scene.initial.sigma0})
