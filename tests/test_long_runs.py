@@ -117,9 +117,18 @@ def test_signal_stops_cleanly_and_resume_ends_bit_for_bit(tmp_path, sig, status)
 
 @pytest.mark.mpi
 def test_sigterm_on_two_ranks_and_resume(tmp_path):
-    scene = _scene(tmp_path, cells=24)
+    """On 2 ranks a resumed run ends where an uninterrupted one does to solver tolerance (MUMPS'
+    parallel factorization is not bitwise reproducible: two uninterrupted 2-rank runs differ in
+    round-off too). The scene is the bundled indentation (contact spreading while the specimen
+    flows), whose steps are never cut, so both runs take the same steps and can be compared row
+    by row; on the paper's 2-D test round-off can turn a borderline Newton solve into a cut step
+    and the two runs then take different step sequences."""
+    text = scenes.bundled()["indentation_relaxation"].read_text()
+    scene = tmp_path / "scene.toml"
+    scene.write_text(re.sub(r"(?m)^cells = .*$", "cells = [48, 24]", text))
     full, cut = tmp_path / "full", tmp_path / "cut"
     assert _run(scene, full, 2, "--quiet").returncode == 0
+    assert _summary(full)["rejected_steps"] == []
     code, _, stderr = _interrupt(scene, cut, signal.SIGTERM, ranks=2)
     assert code == 143, stderr[-3000:]
     assert "Traceback" not in stderr
@@ -131,8 +140,13 @@ def test_sigterm_on_two_ranks_and_resume(tmp_path):
     b = np.loadtxt(full / "contact.csv", delimiter=",", skiprows=1)
     assert a.shape == b.shape
     np.testing.assert_allclose(a[:, :4], b[:, :4], rtol=0, atol=1e-12)
-    np.testing.assert_allclose(a[:, 4], b[:, 4], rtol=0, atol=1e-8 * np.abs(b[:, 4]).max())
-    assert _summary(cut)["newton_iterations"] == _summary(full)["newton_iterations"]
+    for column in (4, 6):  # u_normal, pressure
+        np.testing.assert_allclose(a[:, column], b[:, column], rtol=0,
+                                   atol=1e-8 * np.abs(b[:, column]).max())
+    assert np.abs(b[:, 6]).max() > 0  # contact happened
+    iterations = [_summary(out)["newton_iterations"] for out in (cut, full)]
+    assert len(iterations[0]) == len(iterations[1])
+    assert max(abs(i - j) for i, j in zip(*iterations)) <= 1, iterations
     # another rank count is refused
     other = _run(scene, cut, 1, "--resume", "--quiet")
     assert other.returncode == 2 and "written by 2 MPI rank(s), this run has 1" in other.stderr
