@@ -190,6 +190,47 @@ def test_bad_obstacles_are_located(shared_tmp_path, capsys, old, new, match):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("options, match", [
+    ('snes_rtol = "abc"', r"solver\.petsc_options\.snes_rtol: invalid solver option\(s\) "
+                          r"\(snes_rtol = 'abc'\): Input string abc has no numeric value"),
+    ('snes_type = "newtonls", ksp_type = "bogus"',
+     r"solver\.petsc_options\.ksp_type: .*Unable to find requested KSP type bogus"),
+    ('pc_type = "bogus"', r"solver\.petsc_options\.pc_type: .*Unable to find requested PC type"),
+    ('vpcontact_vi_linear = "bogus"',
+     r"solver\.petsc_options\.vpcontact_vi_linear: .*must be lagged_lu, lagged_gamg or petsc"),
+])
+def test_options_petsc_refuses_are_located(shared_tmp_path, capsys, options, match):
+    """Option values that only PETSc can judge (types, numbers) are refused when the solver is
+    set up: a located error, exit 2, nothing written — not PETSc's error stack."""
+    text = INDENTATION.replace("[time]", f"[solver]\npetsc_options = {{ {options} }}\n\n[time]")
+    scene = _write(shared_tmp_path / "bad.toml", text)
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert re.search(match, err) and "bad.toml:" in err, err
+        assert "Traceback" not in err and "[0]" not in err, err
+    assert not out.exists()
+
+
+def test_obstacle_that_moves_out_of_reach_stops_the_run_with_its_record(shared_tmp_path, capsys):
+    """A cylinder pushed deeper than its own height passes the contact face: at t = 1 the rays
+    of the outer contact nodes miss it. The run stops there on every rank with the motion's
+    place in the file (exit 2) and keeps its record of the steps before."""
+    text = INDENTATION.replace('motion = [0, "-0.02*t"]', 'motion = [0, "-1.0*t"]')
+    scene = _write(shared_tmp_path / "deep.toml", text)
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert re.search(r"deep\.toml:\d+: contact\.motion: at t = 1, where the moving obstacle "
+                         r"has gone: the ray from contact point .* misses the obstacle", err), err
+    MPI.COMM_WORLD.barrier()
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["completed"] is False and summary["steps"] == 3
+    assert "contact.motion" in summary["error"]
+
+
 def test_show_writes_the_new_keys_back(shared_tmp_path, capsys):
     scene = _write(shared_tmp_path / "indentation.toml", INDENTATION)
     assert cli.main(["show", str(scene)]) == 0

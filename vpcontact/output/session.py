@@ -26,11 +26,12 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from vpcontact.model.signorini import Signorini, contact_dofs
-from vpcontact.errors import Interrupted, OutputError
+from vpcontact.errors import InputError, Interrupted, OutputError
 from vpcontact.output import checkpoint, plots, runner
 from vpcontact.output.fields import ContactHistory, on_rank0
 from vpcontact.output.forces import ForceHistory
 from vpcontact.scene.builder import Model, obstacle_level_set
+from vpcontact.scene.schema import SceneError
 from vpcontact.solver.snes_options import time_split
 
 
@@ -78,7 +79,7 @@ class Session:
                 forces=self.forces, stop=self.stop, checkpoints=checkpoints,
                 restart=self.restart, record=record)
         except Exception as err:  # re-raised below once the summary is on disk
-            error = err
+            error = _located(scene, err)
         if self._bar is not None:
             self._bar.close()
         wall = time.perf_counter() - start
@@ -194,6 +195,19 @@ class Session:
             self.out.mkdir(parents=True, exist_ok=True)
             (self.out / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         on_rank0(self.comm, write)  # the summary is on disk when any rank returns
+
+
+def _located(scene, err: Exception) -> Exception:
+    """A moving obstacle that leaves the reach of the contact nodes' rays during the run is an
+    error of the scene's motion (or rotation, or moving level set): say where in the file."""
+    if not isinstance(err, InputError) or isinstance(err, SceneError):
+        return err
+    if "where the moving obstacle has gone" not in str(err):
+        return err
+    contact = scene.contact
+    key = ("contact.motion" if contact.motion is not None else
+           "contact.rotation" if contact.rotation is not None else "contact.obstacle")
+    return scene.error(key, str(err))
 
 
 def _bounds(problem, axis: int):

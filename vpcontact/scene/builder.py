@@ -12,6 +12,7 @@ the vertices) are reported with their place in the scene file.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 from typing import Dict, Optional
 
@@ -332,6 +333,11 @@ def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
 
 def _blame(scene: Scene, message: str) -> str:
     """The scene key an InputError from the problem set-up is most likely about."""
+    if message.startswith("invalid solver option(s) ("):
+        named = re.match(r"invalid solver option\(s\) \(([A-Za-z0-9_]+) = ", message)
+        if named and named.group(1) in scene.solver.petsc_options:
+            return f"solver.petsc_options.{named.group(1)}"
+        return "solver.petsc_options"
     for key, path in (("time scheme", "time.scheme"), ("clamped", "boundary"),
                       ("Dirichlet", "boundary"), ("obstacle", "contact.obstacle"),
                       ("gap", "contact.gap"), ("contact", "contact"),

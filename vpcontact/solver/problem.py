@@ -254,7 +254,7 @@ class QuasistaticProblem:
             self.u.x.scatter_forward()
         try:
             if isinstance(self.contact, Signorini) and self.contact.moving:
-                self.contact_dofs.gap = contact_gap(self.contact, self.contact_dofs, t_new)
+                self.contact_dofs.gap = self._moved_gap(t_new)
                 self.solver.update_bounds(*variable_bounds(self.u, self.contact_dofs))
             # Signorini with a Jacobian that is factorized once: while nothing touches, a plain
             # Newton step with that factorization is tried first, and the VI (which factorizes
@@ -285,6 +285,19 @@ class QuasistaticProblem:
         report = StepReport(n, t_new, its, self.solver.last_reason, ratio, order)
         self.reports.append(report)
         return report
+
+    def _moved_gap(self, t: float) -> np.ndarray:
+        """The gap at the contact nodes once a moving obstacle has reached its place at ``t``
+        (collective: a ray that misses on one rank stops every rank with the same error)."""
+        message = None
+        try:
+            gap = contact_gap(self.contact, self.contact_dofs, t)
+        except InputError as err:
+            gap, message = None, f"at t = {t:.6g}, where the moving obstacle has gone: {err}"
+        message = next((m for m in self.mesh.comm.allgather(message) if m), None)
+        if message is not None:
+            raise InputError(message)
+        return gap
 
     def _error_ratio(self, u_old: np.ndarray, dt: float, tolerance: float):
         """(local error estimate / (tolerance · max|u_n|), order), or (None, 1) without history."""

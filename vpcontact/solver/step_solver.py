@@ -20,8 +20,9 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact.errors import ConvergenceError
-from vpcontact.solver.snes_options import _SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name
+from vpcontact.errors import ConvergenceError, InputError
+from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
+                                          rejected_option_message)
 from vpcontact.solver.vi_linear import LaggedDirectSolve, LaggedMultigrid, rigid_body_modes
 
 _counter = itertools.count()
@@ -93,24 +94,13 @@ class StepSolver:
 
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(self.prefix)
-        opts = PETSc.Options()
-        opts.prefixPush(self.prefix)
         self._options = {**DEFAULT_OPTIONS, **(petsc_options or {})}
-        for key, value in self._options.items():
-            opts[key] = value
-        self._stall_rtol = float(opts.getReal(self.prefix + "vpcontact_stall_rtol"))
-        self._force_rtol = float(opts.getReal(self.prefix + "vpcontact_force_rtol"))
-        self._lag_below = float(opts.getReal(self.prefix + "vpcontact_vi_lag_below"))
-        self._vi_linear = opts.getString(self.prefix + "vpcontact_vi_linear")
-        opts.prefixPop()
-        if self._vi_linear not in ("lagged_lu", "lagged_gamg", "petsc"):
-            raise ValueError("vpcontact_vi_linear must be lagged_lu, lagged_gamg or petsc, got "
-                             f"{self._vi_linear!r}")
-        if not 0.0 <= self._force_rtol < 1.0:
-            raise ValueError(f"vpcontact_force_rtol must be in [0, 1), got {self._force_rtol}")
-        if not 0.0 < self._stall_rtol < 1.0:
-            raise ValueError(f"vpcontact_stall_rtol must be in (0, 1), got {self._stall_rtol}")
-        self._setup(self.snes)
+        try:
+            self._read_options()
+            self._setup(self.snes)
+        except (PETSc.Error, ValueError) as err:
+            _forget(self.prefix, self._options)
+            raise InputError(rejected_option_message(err, petsc_options or {})) from None
         _forget(self.prefix, self._options)
         self.lagged_lu: Optional[LaggedDirectSolve | LaggedMultigrid] = None
         self._free_snes: Optional[PETSc.SNES] = None  # unconstrained Newton of a VI problem
@@ -130,6 +120,28 @@ class StepSolver:
                         "snes": 0.0}
         PETSc.Log.begin()  # PETSc's event log, for the time spent in KSPSolve
         self._ksp_event = PETSc.Log.Event("KSPSolve")
+
+    def _read_options(self) -> None:
+        """Put the options into PETSc's database under this solver's prefix and read
+        vpcontact's own (the SNES, KSP and PC read theirs in :meth:`_setup`)."""
+        opts = PETSc.Options()
+        opts.prefixPush(self.prefix)
+        try:
+            for key, value in self._options.items():
+                opts[key] = value
+            self._stall_rtol = float(opts.getReal(self.prefix + "vpcontact_stall_rtol"))
+            self._force_rtol = float(opts.getReal(self.prefix + "vpcontact_force_rtol"))
+            self._lag_below = float(opts.getReal(self.prefix + "vpcontact_vi_lag_below"))
+            self._vi_linear = opts.getString(self.prefix + "vpcontact_vi_linear")
+        finally:
+            opts.prefixPop()
+        if self._vi_linear not in ("lagged_lu", "lagged_gamg", "petsc"):
+            raise ValueError("vpcontact_vi_linear must be lagged_lu, lagged_gamg or petsc, got "
+                             f"{self._vi_linear!r}")
+        if not 0.0 <= self._force_rtol < 1.0:
+            raise ValueError(f"vpcontact_force_rtol must be in [0, 1), got {self._force_rtol}")
+        if not 0.0 < self._stall_rtol < 1.0:
+            raise ValueError(f"vpcontact_stall_rtol must be in (0, 1), got {self._stall_rtol}")
 
     def _setup(self, snes: PETSc.SNES) -> None:
         snes.setFunction(self._residual, self._b)
