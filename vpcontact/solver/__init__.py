@@ -19,14 +19,15 @@ gives the state (u, σ, ε at quadrature points) step after step:
 from vpcontact.solver.dirichlet import Dirichlet, DirichletParts
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor
 from vpcontact.solver.loads import Loads, PointLoad, tag_facets
-from vpcontact.solver.problem import QuasistaticProblem, StepReport
+from vpcontact.solver.problem import QuasistaticProblem, StepReport, stress_quadrature_degree
 from vpcontact.solver.snes_options import DEFAULT_OPTIONS, reason_name, time_split
 from vpcontact.solver.step_solver import StepSolver
 from vpcontact.solver.stepping import Cut, StepControl, advance
 from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
                                         rigid_body_modes)
 
-__all__ = ["DEFAULT_OPTIONS", "Cut", "Dirichlet", "DirichletParts", "LaggedDirectSolve",
-           "LaggedMultigrid", "Loads", "PointLoad", "QuasistaticProblem", "StepControl",
-           "StepReport", "StepSolver", "advance", "extrapolation_weights", "milne_factor",
-           "options_in_database", "reason_name", "rigid_body_modes", "tag_facets", "time_split"]
+__all__ = ["advance", "Cut", "DEFAULT_OPTIONS", "Dirichlet", "DirichletParts",
+           "extrapolation_weights", "LaggedDirectSolve", "LaggedMultigrid", "Loads",
+           "milne_factor", "options_in_database", "PointLoad", "QuasistaticProblem", "reason_name",
+           "rigid_body_modes", "StepControl", "StepReport", "StepSolver",
+           "stress_quadrature_degree", "tag_facets", "time_split"]

@@ -124,7 +124,7 @@ class QuasistaticProblem:
         self.bcs = self.dirichlet.bcs
 
         # Stress quadrature: exact for ε(v) of degree-p displacements paired with the stress.
-        self.state = QuadratureState(self.u, degree=max(2 * (degree - 1), 1))
+        self.state = QuadratureState(self.u, degree=stress_quadrature_degree(mesh, degree))
         v, du = ufl.TestFunction(self.V), ufl.TrialFunction(self.V)
         n_q = self.state.size
         dxq = self.state.measure
@@ -435,6 +435,16 @@ class QuasistaticProblem:
         local_ok = bool(np.isfinite(self.u.x.array).all() and np.isfinite(self.state.stress.x.array).all())
         if not self.mesh.comm.allreduce(local_ok, op=MPI.LAND):
             raise NonFiniteStateError(f"time step {n} (t = {t:.6g}) produced NaN/Inf in the state")
+
+
+def stress_quadrature_degree(mesh, degree: int) -> int:
+    """Quadrature degree of the stress: ε(u):ε(v) integrated exactly. On simplices ε of P_p
+    displacements has degree p − 1 (one point per cell for P1); on quadrilaterals and hexahedra
+    Q_p's gradient keeps degree p in each coordinate, so the rule needs degree 2p (2×2 or 2×2×2
+    Gauss points for Q1: one point would leave the hourglass modes without stiffness)."""
+    if mesh.ufl_cell().cellname() in ("quadrilateral", "hexahedron"):
+        return 2 * degree
+    return max(2 * (degree - 1), 1)
 
 
 def _unrolled(V, blocks: np.ndarray, exclude: np.ndarray) -> np.ndarray:
