@@ -346,3 +346,30 @@ def test_curved_face_on_a_foundation_surface_from_a_scene(shared_tmp_path):
         assert (last[:, 6] < 0).sum() >= 5  # several nodes in contact
     assert forces["signorini"] > 1e-3
     assert abs(forces["normal_compliance"] / forces["signorini"] - 1) < 0.05, forces
+
+
+def test_p2_normal_compliance_on_a_curved_face_validates_as_it_runs(shared_tmp_path, capsys):
+    """Normal compliance with P2 on a curved Γ3 runs without contact output; with it (recorded in
+    P1 vertex normals) `validate` and `run` refuse it alike, at discretization.degree."""
+    from vpcontact.studies import hertz
+    hertz.cylinder_msh(shared_tmp_path / "cylinder.msh", h_contact=0.02)
+    contact = ('type = "normal_compliance"\nboundary = "contact"\nmu = 1e-4\n'
+               'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n\n'
+               '[discretization]\ndegree = 2')
+    text = CYLINDER.replace("CONTACT", contact)
+    scene = _write(shared_tmp_path / "p2.toml", text)
+    for command in (["validate", str(scene)],
+                    ["run", str(scene), "--out", str(shared_tmp_path / "out"), "--quiet"]):
+        assert cli.main(command) == 2
+        err = capsys.readouterr().err
+        if MPI.COMM_WORLD.rank == 0:
+            assert re.search(r"p2\.toml:\d+: discretization\.degree: normal compliance with "
+                             r"degree = 2 on a contact face that is not an axis-aligned plane",
+                             err), err
+    assert not (shared_tmp_path / "out").exists()
+    quiet = _write(shared_tmp_path / "p2_quiet.toml",
+                   text + "\n[output]\ncontact_csv = false\nfigures = false\n")
+    out = shared_tmp_path / "quiet"
+    assert cli.main(["run", str(quiet), "--out", str(out), "--quiet"]) == 0
+    header, rows = _csv(out / "reactions.csv")
+    assert rows[-1, header.index("contact_y")] > 1e-3

@@ -99,7 +99,11 @@ class ForceHistory:
             if np.abs(contact[:, a]).max() > tiny:
                 axes[0].plot(t, contact[:, a], "--", label=f"contact, {'xyz'[a]}")
         axes[0].set(xlabel="t [s]", ylabel="force [N]", title="(a) reactions and contact force")
-        axes[0].legend(fontsize=7)
+        if axes[0].get_legend_handles_labels()[0]:
+            axes[0].legend(fontsize=7)
+        else:  # nothing touched and nothing was held: say so rather than draw an empty legend
+            axes[0].text(0.5, 0.5, "every force is zero", ha="center", va="center",
+                         transform=axes[0].transAxes)
         if driven:
             d = np.array(self.driver, dtype=float)
             axes[1].plot(d, np.linalg.norm(contact, axis=1), "o-", ms=3)

@@ -79,8 +79,24 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
                                      time_scheme=scene.time.scheme)
     except InputError as err:
         raise scene.error(_blame(scene, str(err)), str(err)) from None
+    _check_contact_output(scene, mesh, facet_tags, contact_tag)
     _initial_state(scene, problem)
     return Model(scene, problem, facet_tags, part_tags, contact_tag)
+
+
+def _check_contact_output(scene: Scene, mesh, facet_tags, tag) -> None:
+    """Normal compliance's contact output (contact.csv, figures) is recorded at the nodes of Γ3
+    in their vertex normals, which a face that is not an axis-aligned plane has for P1 only."""
+    output = scene.output
+    if (scene.contact is None or scene.contact.type != "normal_compliance" or scene.degree == 1
+            or not (output.contact_csv or output.figures)):
+        return
+    if axis_aligned_normal(mesh, facet_tags, tag) is None:
+        raise scene.error("discretization.degree", (
+            f"normal compliance with degree = {scene.degree} on a contact face that is not an "
+            "axis-aligned plane: its contact output (contact.csv, figures) is recorded in vertex "
+            "normals, for P1 displacements only; use degree = 1, or set [output] contact_csv = "
+            "false and figures = false to run it without that output"))
 
 
 def _mesh(scene: Scene, comm):
