@@ -373,3 +373,13 @@ def test_p2_normal_compliance_on_a_curved_face_validates_as_it_runs(shared_tmp_p
     assert cli.main(["run", str(quiet), "--out", str(out), "--quiet"]) == 0
     header, rows = _csv(out / "reactions.csv")
     assert rows[-1, header.index("contact_y")] > 1e-3
+
+
+def test_contact_csv_off_is_not_written(shared_tmp_path):
+    text = INDENTATION + "\n[output]\ncontact_csv = false\nfigures = false\nxdmf = false\n"
+    scene = _write(shared_tmp_path / "quiet.toml", text)
+    out = shared_tmp_path / "out"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    assert not (out / "contact.csv").exists()
+    assert not list(out.glob("*.png")) and not list(out.glob("*.xdmf"))
+    assert (out / "reactions.csv").is_file() and (out / "summary.json").is_file()

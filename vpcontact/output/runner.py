@@ -53,7 +53,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         name: str = "result", xdmf: bool = True, verbose: bool = True,
         max_cuts: int = 12, history: Optional[ContactHistory] = None,
         tolerance: Optional[float] = None,
-        csv_name: str = "contact_history.csv", progress=None, xdmf_every: int = 1,
+        csv_name: Optional[str] = "contact_history.csv", progress=None, xdmf_every: int = 1,
         xdmf_extra=(), forces: Optional[ForceHistory] = None, stop=None,
         checkpoints: Optional[Checkpointer] = None, restart: Optional[Restart] = None,
         record: Optional[RunRecord] = None
@@ -64,8 +64,8 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     ``max_cuts`` times in a row; with ``tolerance`` k also follows a local time-error estimate (see :mod:`vpcontact.solver.stepping`). If it still fails, the outputs of
     the accepted steps are written, ``record.completed`` stays False and the error is re-raised.
 
-    ``history`` records the contact nodes (default: a Signorini problem's); ``progress(step,
-    report)`` is called after every accepted step on every rank; the XDMF series gets every
+    ``history`` records the contact nodes (default: a Signorini problem's), written to
+    ``csv_name`` (None: not written); ``progress(step, report)`` is called after every accepted step on every rank; the XDMF series gets every
     ``xdmf_every``-th step and the last one, with the fields ``xdmf_extra`` ((Function, refresh)
     pairs) besides u, stress and von Mises norm. ``forces`` records the support reactions and
     the contact force at every step (``reactions.csv``). ``stop`` (a
@@ -149,7 +149,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                 series.close()
         cells.update()
         with _timed(record, out):
-            if out is not None and history is not None:
+            if out is not None and history is not None and csv_name:
                 history.write_csv(Path(out) / csv_name)
             if out is not None and forces is not None:
                 forces.write_csv(Path(out) / "reactions.csv")

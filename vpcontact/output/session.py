@@ -74,7 +74,7 @@ class Session:
                 problem, scene.time.T, scene.time.k, out=self.out, name=scene.name,
                 xdmf=scene.output.xdmf, verbose=False, max_cuts=scene.time.max_cuts,
                 tolerance=scene.time.tolerance,
-                history=history, csv_name="contact.csv", progress=self._progress,
+                history=history, csv_name="contact.csv" if scene.output.contact_csv else None, progress=self._progress,
                 xdmf_every=scene.output.every, xdmf_extra=self._pressure_field(history),
                 forces=self.forces, stop=self.stop, checkpoints=checkpoints,
                 restart=self.restart, record=record)
