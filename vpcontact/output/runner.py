@@ -65,16 +65,16 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     (see :mod:`vpcontact.solver.stepping`). If it still fails, the outputs of the accepted
     steps are written, ``record.completed`` stays False and the error is re-raised.
 
-    ``history`` records the contact nodes (default: a Signorini problem's), written to
-    ``csv_name`` (None: not written); ``progress(step, report)`` is called after every
-    accepted step on every rank; the XDMF series gets every ``xdmf_every``-th step and the
-    last one, with the fields ``xdmf_extra`` ((Function, refresh) pairs) besides u, stress and
-    von Mises norm. ``forces`` records the support reactions and the contact force at every
-    step (``reactions.csv``). ``stop`` (a :class:`~vpcontact.output.interrupt.StopRequest`)
-    is asked after every step; when a signal came, the outputs are closed, a checkpoint is written and :class:`Interrupted` is raised.
-    ``checkpoints`` writes checkpoints; ``restart`` continues a run from one (the problem has
-    been restored already; outputs are appended). ``record``: filled in place (so that a caller
-    keeps it when the run fails).
+    ``history`` records the contact nodes (default: a Signorini problem's), written to ``csv_name``
+    (None: not written); ``progress(step, report)`` is called after every accepted step on every
+    rank; the XDMF series gets every ``xdmf_every``-th step and the last one, with the fields
+    ``xdmf_extra`` ((Function, refresh) pairs) besides u, stress and von Mises norm. ``forces``
+    records the support reactions and the contact force at every step (``reactions.csv``). ``stop``
+    (a :class:`~vpcontact.output.interrupt.StopRequest`) is asked after every step; when a signal
+    came, the outputs are closed, a checkpoint is written and :class:`Interrupted` is raised.
+    ``checkpoints`` writes checkpoints; ``restart`` continues a run from one (the problem has been
+    restored already; outputs are appended). ``record``: filled in place (so that a caller keeps it
+    when the run fails).
 
     Returns the run record, the contact history (Signorini problems) and the cell stress fields.
     """
