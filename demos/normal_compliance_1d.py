@@ -47,7 +47,6 @@ from __future__ import annotations
 import argparse
 import csv
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -193,6 +192,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    from vpcontact.cli import configure_logging
-    configure_logging()  # JIT messages off the terminal
-    sys.exit(main())
+    from vpcontact.cli import run_script
+    run_script(main)  # JIT messages off the terminal; an error is one line, exit 1

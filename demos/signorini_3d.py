@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from pathlib import Path
 
 from mpi4py import MPI
@@ -81,11 +80,5 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    from vpcontact.cli import configure_logging
-    configure_logging()  # JIT messages off the terminal
-    from vpcontact.errors import VpcontactError
-    try:
-        sys.exit(main())
-    except VpcontactError as err:  # a clear message, no traceback, nothing written as a result
-        print(f"error: {err}", file=sys.stderr)
-        sys.exit(1)
+    from vpcontact.cli import run_script
+    run_script(main)  # JIT messages off the terminal; an error is one line, exit 1

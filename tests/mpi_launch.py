@@ -1,7 +1,11 @@
 # SPDX-License-Identifier: MIT
-"""Launching child processes (mpirun, the command line) from the tests."""
+"""MPI helpers for the tests: launching child processes (mpirun, the command line) and
+writing a file that every rank then reads."""
 
 import os
+from pathlib import Path
+
+from mpi4py import MPI
 
 
 def clean_environment() -> dict:
@@ -13,3 +17,16 @@ def clean_environment() -> dict:
             env[key] = os.environ[key]
     env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
     return env
+
+
+def write_shared(path: Path, text: str) -> Path:
+    """Write ``text`` on rank 0; every rank returns once the file exists.
+
+    The first barrier keeps rank 0 from overwriting a file that another rank is still reading
+    (tests read a scene, change it and write it back under the same name).
+    """
+    MPI.COMM_WORLD.barrier()
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text)
+    MPI.COMM_WORLD.barrier()
+    return path

@@ -20,18 +20,7 @@ from vpcontact import scene as scenes
 from vpcontact.scene import build
 from vpcontact.model import LinearRate, Perzyna, PlaneStrain
 
-
-def _write(path: Path, text: str) -> Path:
-    """Write ``text`` on rank 0; every rank returns once the file exists.
-
-    The first barrier keeps rank 0 from overwriting a file that another rank is still reading
-    (tests read a scene, change it and write it back under the same name).
-    """
-    MPI.COMM_WORLD.barrier()
-    if MPI.COMM_WORLD.rank == 0:
-        path.write_text(text)
-    MPI.COMM_WORLD.barrier()
-    return path
+from mpi_launch import write_shared
 
 
 def _small(name: str, folder: Path, cells: str, T: float, k: float, extra: str = "") -> Path:
@@ -40,7 +29,7 @@ def _small(name: str, folder: Path, cells: str, T: float, k: float, extra: str =
     text = re.sub(r"(?m)^cells = .*$", f"cells = {cells}", text)
     text = re.sub(r"(?m)^T = .*$", f"T = {T}", text)
     text = re.sub(r"(?m)^k = .*$", f"k = {k}", text)
-    return _write(folder / f"{name}.toml", text + extra)
+    return write_shared(folder / f"{name}.toml", text + extra)
 
 
 def _summary(out: Path) -> dict:
@@ -70,7 +59,7 @@ def test_show_prints_a_scene_that_loads_again(capsys):
 def test_bad_scene_exits_2_with_its_place_and_writes_nothing(shared_tmp_path, capsys):
     bad = _small("elastic_2d", shared_tmp_path, "[4, 2]", 1.0, 0.5)
     text = bad.read_text().replace("E = 1e5", "E = -1e5")
-    _write(bad, text)
+    write_shared(bad, text)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(bad), "--out", str(out)]) == 2
     err = capsys.readouterr().err
@@ -90,7 +79,7 @@ def test_mesh_level_errors_are_located(shared_tmp_path, capsys, change, where, m
     path = _small("elastic_2d", shared_tmp_path, "[4, 2]", 1.0, 0.5)
     text = path.read_text()
     assert change[0] in text
-    _write(path, text.replace(change[0], change[1]))
+    write_shared(path, text.replace(change[0], change[1]))
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(path), "--out", str(out)]) == 2
     err = capsys.readouterr().err
@@ -121,7 +110,7 @@ def test_unreached_obstacle_costs_no_vi_and_changes_nothing(shared_tmp_path):
                            'plane = { axis = "y", value = 0.0 }\n\n[boundary.end]')
     contact += '\n[contact]\ntype = "signorini"\nboundary = "floor"\ngap = 10.0\n'
     path = shared_tmp_path / "far_obstacle.toml"
-    _write(path, contact)
+    write_shared(path, contact)
     results = []
     for scene_path in (free, path):
         model = build(scenes.load(scene_path))
@@ -142,7 +131,7 @@ def test_reached_obstacle_switches_to_the_vi(shared_tmp_path):
                                     'plane = { axis = "y", value = 0.0 }\n\n[boundary.end]')
     text += '\n[contact]\ntype = "signorini"\nboundary = "floor"\ngap = 1e-5\n'
     path = shared_tmp_path / "near_obstacle.toml"
-    _write(path, text)
+    write_shared(path, text)
     model = build(scenes.load(path))
     for _ in range(4):
         model.problem.step(0.25)
@@ -205,7 +194,7 @@ def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, cap
     path = _small("signorini_2d", shared_tmp_path, "[4, 4]", 1.0, 0.5,
                   extra="\n[solver]\npetsc_options = { snes_max_it = 1 }\n")
     text = re.sub(r"(?m)^k = .*$", "k = 0.5\nmax_cuts = 0", path.read_text())
-    _write(path, text)
+    write_shared(path, text)
     out = shared_tmp_path / "failed"
     assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 1
     summary = _summary(out)
@@ -218,7 +207,7 @@ def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, cap
 def test_explicit_scene_beyond_its_stability_limit_is_refused(shared_tmp_path, capsys):
     path = _small("signorini_2d", shared_tmp_path, "[4, 4]", 1.0, 0.5)
     text = path.read_text().replace('scheme = "implicit"', 'scheme = "explicit"')
-    _write(path, text)
+    write_shared(path, text)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(path), "--out", str(out)]) == 2
     err = capsys.readouterr().err
@@ -230,7 +219,7 @@ def test_explicit_scene_beyond_its_stability_limit_is_refused(shared_tmp_path, c
 def test_plane_strain_scene_runs_the_3d_law_in_the_plane(shared_tmp_path):
     path = _small("elastic_2d", shared_tmp_path, "[8, 2]", 1.0, 0.5)
     text = path.read_text().replace("nu = 0.3", 'nu = 0.3\nplane = "strain"')
-    _write(path, text)
+    write_shared(path, text)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
     assert isinstance(build(scenes.load(path)).problem.law, PlaneStrain)

@@ -13,6 +13,8 @@ from mpi4py import MPI
 
 from vpcontact import cli
 
+from mpi_launch import write_shared
+
 COMPRESSION = """\
 name = "compression"
 
@@ -78,21 +80,13 @@ k = 0.25
 """
 
 
-def _write(path: Path, text: str) -> Path:
-    MPI.COMM_WORLD.barrier()
-    if MPI.COMM_WORLD.rank == 0:
-        path.write_text(text)
-    MPI.COMM_WORLD.barrier()
-    return path
-
-
 def _csv(path: Path):
     header = path.read_text().splitlines()[0].split(",")
     return header, np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
 
 
 def test_rollers_and_prescribed_displacement_from_a_scene(shared_tmp_path):
-    scene = _write(shared_tmp_path / "compression.toml", COMPRESSION)
+    scene = write_shared(shared_tmp_path / "compression.toml", COMPRESSION)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     header, rows = _csv(out / "reactions.csv")
@@ -109,7 +103,7 @@ def test_rollers_and_prescribed_displacement_from_a_scene(shared_tmp_path):
 
 
 def test_moving_cylinder_indents_a_block_from_a_scene(shared_tmp_path):
-    scene = _write(shared_tmp_path / "indentation.toml", INDENTATION)
+    scene = write_shared(shared_tmp_path / "indentation.toml", INDENTATION)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     header, rows = _csv(out / "reactions.csv")
@@ -140,7 +134,7 @@ def test_moving_cylinder_indents_a_block_from_a_scene(shared_tmp_path):
 ])
 def test_bad_dirichlet_parts_are_located(shared_tmp_path, capsys, old, new, match):
     assert old in COMPRESSION
-    scene = _write(shared_tmp_path / "bad.toml", COMPRESSION.replace(old, new))
+    scene = write_shared(shared_tmp_path / "bad.toml", COMPRESSION.replace(old, new))
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
@@ -181,7 +175,7 @@ def test_bad_dirichlet_parts_are_located(shared_tmp_path, capsys, old, new, matc
 ])
 def test_bad_obstacles_are_located(shared_tmp_path, capsys, old, new, match):
     assert old in INDENTATION
-    scene = _write(shared_tmp_path / "bad.toml", INDENTATION.replace(old, new))
+    scene = write_shared(shared_tmp_path / "bad.toml", INDENTATION.replace(old, new))
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
@@ -203,7 +197,7 @@ def test_options_petsc_refuses_are_located(shared_tmp_path, capsys, options, mat
     """Option values that only PETSc can judge (types, numbers) are refused when the solver is
     set up: a located error, exit 2, nothing written — not PETSc's error stack."""
     text = INDENTATION.replace("[time]", f"[solver]\npetsc_options = {{ {options} }}\n\n[time]")
-    scene = _write(shared_tmp_path / "bad.toml", text)
+    scene = write_shared(shared_tmp_path / "bad.toml", text)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
@@ -218,7 +212,7 @@ def test_obstacle_that_moves_out_of_reach_stops_the_run_with_its_record(shared_t
     of the outer contact nodes miss it. The run stops there on every rank with the motion's
     place in the file (exit 2) and keeps its record of the steps before."""
     text = INDENTATION.replace('motion = [0, "-0.02*t"]', 'motion = [0, "-1.0*t"]')
-    scene = _write(shared_tmp_path / "deep.toml", text)
+    scene = write_shared(shared_tmp_path / "deep.toml", text)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
     err = capsys.readouterr().err
@@ -232,13 +226,13 @@ def test_obstacle_that_moves_out_of_reach_stops_the_run_with_its_record(shared_t
 
 
 def test_show_writes_the_new_keys_back(shared_tmp_path, capsys):
-    scene = _write(shared_tmp_path / "indentation.toml", INDENTATION)
+    scene = write_shared(shared_tmp_path / "indentation.toml", INDENTATION)
     assert cli.main(["show", str(scene)]) == 0
     text = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:
         assert 'obstacle = { shape = "cylinder", center = [0.0, 0.5], radius = 0.5 }' in text
         assert 'motion = [0.0, "-0.02*t"]' in text or "motion = [0, " in text
-    scene = _write(shared_tmp_path / "compression.toml", COMPRESSION)
+    scene = write_shared(shared_tmp_path / "compression.toml", COMPRESSION)
     assert cli.main(["show", str(scene)]) == 0
     text = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:
@@ -257,7 +251,7 @@ def test_turning_obstacle_is_the_same_motion_as_its_translation(shared_tmp_path)
     results = {}
     for name, text in (("turned", turned), ("moved", moved)):
         out = shared_tmp_path / name
-        scene = _write(shared_tmp_path / f"{name}.toml", text)
+        scene = write_shared(shared_tmp_path / f"{name}.toml", text)
         assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
         header, rows = _csv(out / "reactions.csv")
         contact = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
@@ -272,12 +266,12 @@ def test_turning_obstacle_is_the_same_motion_as_its_translation(shared_tmp_path)
 def test_show_writes_a_rotation_back(shared_tmp_path, capsys):
     text = INDENTATION.replace('motion = [0, "-0.02*t"]',
                                'rotation = { center = [0.0, 0.38], angle = "0.6*t" }')
-    scene = _write(shared_tmp_path / "turned.toml", text)
+    scene = write_shared(shared_tmp_path / "turned.toml", text)
     assert cli.main(["show", str(scene)]) == 0
     shown = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:
         assert 'rotation = { center = [0.0, 0.38], angle = "0.6*t" }' in shown
-    again = _write(shared_tmp_path / "again.toml", shown if MPI.COMM_WORLD.rank == 0 else "")
+    again = write_shared(shared_tmp_path / "again.toml", shown if MPI.COMM_WORLD.rank == 0 else "")
     assert cli.main(["validate", str(again)]) == 0
 
 
@@ -332,7 +326,7 @@ def test_curved_face_on_a_foundation_surface_from_a_scene(shared_tmp_path):
                           'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }'),
             ("normal_compliance", 'type = "normal_compliance"\nboundary = "contact"\nmu = 1e-4\n'
                                   'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }')):
-        scene = _write(shared_tmp_path / f"{kind}.toml", CYLINDER.replace("CONTACT", contact))
+        scene = write_shared(shared_tmp_path / f"{kind}.toml", CYLINDER.replace("CONTACT", contact))
         out = shared_tmp_path / kind
         assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
         header, rows = _csv(out / "reactions.csv")
@@ -357,7 +351,7 @@ def test_p2_normal_compliance_on_a_curved_face_validates_as_it_runs(shared_tmp_p
                'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n\n'
                '[discretization]\ndegree = 2')
     text = CYLINDER.replace("CONTACT", contact)
-    scene = _write(shared_tmp_path / "p2.toml", text)
+    scene = write_shared(shared_tmp_path / "p2.toml", text)
     for command in (["validate", str(scene)],
                     ["run", str(scene), "--out", str(shared_tmp_path / "out"), "--quiet"]):
         assert cli.main(command) == 2
@@ -367,7 +361,7 @@ def test_p2_normal_compliance_on_a_curved_face_validates_as_it_runs(shared_tmp_p
                              r"degree = 2 on a contact face that is not an axis-aligned plane",
                              err), err
     assert not (shared_tmp_path / "out").exists()
-    quiet = _write(shared_tmp_path / "p2_quiet.toml",
+    quiet = write_shared(shared_tmp_path / "p2_quiet.toml",
                    text + "\n[output]\ncontact_csv = false\nfigures = false\n")
     out = shared_tmp_path / "quiet"
     assert cli.main(["run", str(quiet), "--out", str(out), "--quiet"]) == 0
@@ -377,7 +371,7 @@ def test_p2_normal_compliance_on_a_curved_face_validates_as_it_runs(shared_tmp_p
 
 def test_contact_csv_off_is_not_written(shared_tmp_path):
     text = INDENTATION + "\n[output]\ncontact_csv = false\nfigures = false\nxdmf = false\n"
-    scene = _write(shared_tmp_path / "quiet.toml", text)
+    scene = write_shared(shared_tmp_path / "quiet.toml", text)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     assert not (out / "contact.csv").exists()

@@ -4,7 +4,6 @@ cell's stiffness has no zero-energy (hourglass) modes beyond the rigid motions, 
 cells give the answers their physics says (a point load is carried, an obstacle is felt)."""
 
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +15,8 @@ from mpi4py import MPI
 from vpcontact import cli
 from vpcontact.model.tensors import strain
 from vpcontact.solver import stress_quadrature_degree
+
+from mpi_launch import write_shared
 
 
 def _one_cell(cell: str):
@@ -42,14 +43,6 @@ def test_q1_stiffness_has_only_the_rigid_modes(cell, rigid):
     msh = _one_cell(cell)
     assert _zero_modes(msh, stress_quadrature_degree(msh, 1)) == rigid
     assert _zero_modes(msh, 1) > rigid  # one point per cell: hourglass modes (the test bites)
-
-
-def _write(path: Path, text: str) -> Path:
-    MPI.COMM_WORLD.barrier()
-    if MPI.COMM_WORLD.rank == 0:
-        path.write_text(text)
-    MPI.COMM_WORLD.barrier()
-    return path
 
 
 POINT_LOAD = """\
@@ -122,7 +115,7 @@ figures = false
 def test_point_load_on_hexahedra_is_carried(shared_tmp_path):
     """Under one point load, one-point integration left hourglass modes that Newton could not
     resolve (50 iterations, no convergence); an elastic step is one Newton iteration."""
-    scene = _write(shared_tmp_path / "point_load.toml", POINT_LOAD)
+    scene = write_shared(shared_tmp_path / "point_load.toml", POINT_LOAD)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())
@@ -134,7 +127,7 @@ def test_indenter_on_hexahedra_is_felt(shared_tmp_path):
     """An ellipsoid pushed 0.01 into a hexahedral block: contact forms, u_ν = g wherever the
     pressure is compressive, and the contact force is balanced by the support. (With one point
     per cell the face's nodes went up and down in a checkerboard and the force stayed zero.)"""
-    scene = _write(shared_tmp_path / "punch.toml", PUNCH)
+    scene = write_shared(shared_tmp_path / "punch.toml", PUNCH)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())

@@ -61,13 +61,27 @@ def main(argv: Optional[list] = None) -> int:
 
 def configure_logging(verbose: bool = False) -> None:
     """Keep the form compiler's JIT messages (logged at INFO on a fresh machine) off the terminal
-    unless ``verbose`` (``-v``); demos and benchmarks call it too. distutils resets the root logger's level to INFO at every JIT build, so the
-    level is set on the root handler, which nothing else touches."""
+    unless ``verbose`` (``-v``); demos and benchmarks call it too. distutils resets the root
+    logger's level to INFO at every JIT build, so the level is set on the root handler, which
+    nothing else touches."""
     logging.basicConfig()  # the root handler (FFCx's own basicConfig() is then a no-op)
     level = logging.INFO if verbose else logging.WARNING
     for handler in logging.getLogger().handlers:
         handler.setLevel(level)
     logging.getLogger().setLevel(level)
+
+
+def run_script(main) -> None:
+    """Run a demo's or benchmark's ``main()`` the way the command line runs: JIT messages off
+    the terminal, a :class:`VpcontactError` ends in one line on stderr and exit status 1
+    (nothing written as a result), any other status from ``main()`` is the exit status."""
+    from vpcontact.errors import VpcontactError
+    configure_logging()
+    try:
+        sys.exit(main())
+    except VpcontactError as err:
+        print(f"error: {err}", file=sys.stderr)
+        sys.exit(1)
 
 
 def _parser() -> argparse.ArgumentParser:

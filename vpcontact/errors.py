@@ -16,6 +16,23 @@ class InputError(VpcontactError, ValueError):
     """A parameter, scene entry or mesh does not describe a valid problem."""
 
 
+class SolverOptionError(InputError):
+    """PETSc (or vpcontact) refused a solver option while a solver was set up.
+
+    Attributes:
+        option: the option's name (as given, without the leading "-") when the refusal names
+            its value, else None.
+    """
+
+    def __init__(self, message: str, option: str | None = None):
+        super().__init__(message)
+        self.option = option
+
+
+class ObstacleOutOfReach(InputError):
+    """During the run a moving obstacle left the reach of the contact nodes' normal rays."""
+
+
 class ConvergenceError(VpcontactError, RuntimeError):
     """A nonlinear (SNES) or linear (KSP) solve of one time step did not converge.
 

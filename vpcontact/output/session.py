@@ -26,12 +26,11 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from vpcontact.model.signorini import Signorini, contact_dofs
-from vpcontact.errors import InputError, Interrupted, OutputError
+from vpcontact.errors import Interrupted, ObstacleOutOfReach, OutputError
 from vpcontact.output import checkpoint, plots, runner
 from vpcontact.output.fields import ContactHistory, on_rank0
 from vpcontact.output.forces import ForceHistory
 from vpcontact.scene.builder import Model, obstacle_level_set
-from vpcontact.scene.schema import SceneError
 from vpcontact.solver.snes_options import time_split
 
 
@@ -200,9 +199,7 @@ class Session:
 def _located(scene, err: Exception) -> Exception:
     """A moving obstacle that leaves the reach of the contact nodes' rays during the run is an
     error of the scene's motion (or rotation, or moving level set): say where in the file."""
-    if not isinstance(err, InputError) or isinstance(err, SceneError):
-        return err
-    if "where the moving obstacle has gone" not in str(err):
+    if not isinstance(err, ObstacleOutOfReach):
         return err
     contact = scene.contact
     key = ("contact.motion" if contact.motion is not None else

@@ -12,7 +12,6 @@ the vertices) are reported with their place in the scene file.
 from __future__ import annotations
 
 import math
-import re
 from dataclasses import dataclass
 from typing import Dict, Optional
 
@@ -23,7 +22,7 @@ from mpi4py import MPI
 
 from vpcontact.model.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
 from vpcontact.model.normal_compliance import NormalCompliance
-from vpcontact.errors import InputError
+from vpcontact.errors import InputError, SolverOptionError
 from vpcontact.solver.loads import Loads, PointLoad
 from vpcontact.solver.problem import QuasistaticProblem
 from vpcontact.scene.files import Scene
@@ -77,6 +76,10 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
                                      petsc_options=dict(scene.solver.petsc_options),
                                      predictor=scene.solver.predictor,
                                      time_scheme=scene.time.scheme)
+    except SolverOptionError as err:
+        known = err.option is not None and err.option in scene.solver.petsc_options
+        raise scene.error("solver.petsc_options" + (f".{err.option}" if known else ""),
+                          str(err)) from None
     except InputError as err:
         raise scene.error(_blame(scene, str(err)), str(err)) from None
     _check_contact_output(scene, mesh, facet_tags, contact_tag)
@@ -349,11 +352,6 @@ def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
 
 def _blame(scene: Scene, message: str) -> str:
     """The scene key an InputError from the problem set-up is most likely about."""
-    if message.startswith("invalid solver option(s) ("):
-        named = re.match(r"invalid solver option\(s\) \(([A-Za-z0-9_]+) = ", message)
-        if named and named.group(1) in scene.solver.petsc_options:
-            return f"solver.petsc_options.{named.group(1)}"
-        return "solver.petsc_options"
     for key, path in (("time scheme", "time.scheme"), ("clamped", "boundary"),
                       ("Dirichlet", "boundary"), ("obstacle", "contact.obstacle"),
                       ("gap", "contact.gap"), ("contact", "contact"),

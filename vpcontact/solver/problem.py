@@ -29,7 +29,7 @@ from petsc4py import PETSc
 
 from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor, past_nodes
-from vpcontact.errors import InputError, NonFiniteStateError, StepRejected
+from vpcontact.errors import InputError, NonFiniteStateError, ObstacleOutOfReach, StepRejected
 from vpcontact.solver.step_solver import StepSolver
 from vpcontact.model.quadrature import QuadratureState
 from vpcontact.model.frames import rotation_matrix
@@ -296,7 +296,7 @@ class QuasistaticProblem:
             gap, message = None, f"at t = {t:.6g}, where the moving obstacle has gone: {err}"
         message = next((m for m in self.mesh.comm.allgather(message) if m), None)
         if message is not None:
-            raise InputError(message)
+            raise ObstacleOutOfReach(message)
         return gap
 
     def _error_ratio(self, u_old: np.ndarray, dt: float, tolerance: float):

@@ -7,6 +7,8 @@ import re
 
 from petsc4py import PETSc
 
+from vpcontact.errors import SolverOptionError
+
 _REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
 
 DEFAULT_OPTIONS = {
@@ -53,18 +55,19 @@ def _forget(prefix: str, keys) -> None:
             opts.delValue(prefix + key)
 
 
-def rejected_option_message(err: Exception, options: dict) -> str:
-    """A one-line message for PETSc options that PETSc (or vpcontact) refused while a solver was
-    set up: PETSc's own reason (the last line of its error stack), and the option(s) whose value
-    it names, else every option given."""
+def rejected_option(err: Exception, options: dict) -> SolverOptionError:
+    """The error for PETSc options that PETSc (or vpcontact) refused while a solver was set up,
+    in one line: PETSc's own reason (the last line of its error stack), and the option(s) whose
+    value it names, else every option given."""
     lines = [line.split("] ", 1)[-1].strip() for line in str(err).splitlines() if line.strip()]
     reason = lines[-1] if lines else type(err).__name__
     named = [key for key, value in options.items()
              if re.search(rf"(?<![\w.-]){re.escape(str(value))}(?![\w.-])", reason)]
     given = ", ".join(f"{key} = {options[key]!r}" for key in (named or options))
-    return (f"invalid solver option(s) ({given or 'the defaults'}): {reason}. See the "
-            "PETSc manual pages of SNESSetFromOptions, KSPSetFromOptions and PCSetFromOptions "
-            "for the valid names and values")
+    return SolverOptionError(
+        f"invalid solver option(s) ({given or 'the defaults'}): {reason}. See the PETSc manual "
+        "pages of SNESSetFromOptions, KSPSetFromOptions and PCSetFromOptions for the valid names "
+        "and values", named[0] if len(named) == 1 else None)
 
 
 def time_split(timings: dict) -> dict:

@@ -20,9 +20,9 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact.errors import ConvergenceError, InputError
+from vpcontact.errors import ConvergenceError
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
-                                          rejected_option_message)
+                                          rejected_option)
 from vpcontact.solver.vi_linear import LaggedDirectSolve, LaggedMultigrid, rigid_body_modes
 
 _counter = itertools.count()
@@ -100,7 +100,7 @@ class StepSolver:
             self._setup(self.snes)
         except (PETSc.Error, ValueError) as err:
             _forget(self.prefix, self._options)
-            raise InputError(rejected_option_message(err, petsc_options or {})) from None
+            raise rejected_option(err, petsc_options or {}) from None
         _forget(self.prefix, self._options)
         self.lagged_lu: Optional[LaggedDirectSolve | LaggedMultigrid] = None
         self._free_snes: Optional[PETSc.SNES] = None  # unconstrained Newton of a VI problem
