@@ -18,12 +18,13 @@ E, NU = 1e5, 0.3
 CLAMP, END = 1, 2
 
 
-def _cantilever(law):
+def _cantilever(law, formulation=None):
     mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.zeros(2), np.array([4.0, 1.0])], [16, 4])
     tags = tag_facets(mesh, {CLAMP: lambda x: np.isclose(x[0], 0.0),
                              END: lambda x: np.isclose(x[0], 4.0)})
     loads = Loads(tractions={END: lambda x, t: ufl.as_vector([0.2 * t, -t])})
-    return QuasistaticProblem(mesh, tags, law, clamped_tag=CLAMP, loads=loads), tags
+    return QuasistaticProblem(mesh, tags, law, clamped_tag=CLAMP, loads=loads,
+                              formulation=formulation), tags
 
 
 def _global_max(a):
@@ -51,10 +52,13 @@ def test_elastic_plane_strain_equals_a_dolfinx_solve_with_lame_constants():
     assert np.allclose(s33, NU * (s[:, 0] + s[:, 1]), rtol=1e-10, atol=1e-10 * _global_max(s))
 
 
-def test_perzyna_plane_strain_limits_and_flow():
-    elastic, _ = _cantilever(PlaneStrain(Elastic(Elasticity("3d", E, NU))))
-    rigid, _ = _cantilever(PlaneStrain(Perzyna(Elasticity("3d_standard", E, NU), 1e12, 200.0)))
-    soft, _ = _cantilever(PlaneStrain(Perzyna(Elasticity("3d_standard", E, NU), 0.5, 200.0)))
+@pytest.mark.parametrize("formulation", ["displacement", "mixed"])
+def test_perzyna_plane_strain_limits_and_flow(formulation):
+    elastic, _ = _cantilever(PlaneStrain(Elastic(Elasticity("3d", E, NU))), formulation)
+    rigid, _ = _cantilever(PlaneStrain(Perzyna(Elasticity("3d_standard", E, NU), 1e12, 200.0)),
+                           formulation)
+    soft, _ = _cantilever(PlaneStrain(Perzyna(Elasticity("3d_standard", E, NU), 0.5, 200.0)),
+                          formulation)
     for p in (elastic, rigid, soft):
         for _ in range(4):
             p.step(0.25)

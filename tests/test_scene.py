@@ -330,8 +330,9 @@ def test_wrong_types(old, new, match):
 @pytest.mark.parametrize("old, new, path, match", [
     ("E = 1e8", "E = -1", "material.E", "must be > 0, got -1"),
     ("E = 1e8", "E = 0", "material.E", "must be > 0, got 0"),
-    ("nu = 0.3", "nu = 0.5", "material.nu", r"must lie in \(-1, 0.5\), got 0.5"),
-    ("nu = 0.3", "nu = -1.0", "material.nu", r"must lie in \(-1, 0.5\), got -1"),
+    ("nu = 0.3", "nu = 0.5", "material.nu", r"nu = 0.5 \(incompressible\) needs \[discretization\] formulation = \"mixed\""),
+    ("nu = 0.3", "nu = 0.51", "material.nu", r"must lie in \(-1, 0.5\], got 0.51"),
+    ("nu = 0.3", "nu = -1.0", "material.nu", r"must lie in \(-1, 0.5\], got -1"),
     ("mu = 100.0", "mu = 100.0\nalpha = 0", "contact.alpha", r"must lie in \(0, 1\], got 0"),
     ("mu = 100.0", "mu = 100.0\nalpha = 1.5", "contact.alpha", r"must lie in \(0, 1\], got 1.5"),
     ("mu = 100.0", "mu = 0.0", "contact.mu", "must be > 0, got 0"),

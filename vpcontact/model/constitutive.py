@@ -24,6 +24,9 @@ from vpcontact import kernels
 from vpcontact.errors import InputError
 
 SCHEMES = ("explicit", "implicit")
+#: Poisson's ratio of the kernels' stand-in for an incompressible material (see
+#: :meth:`Elasticity.kernel_moduli`).
+INCOMPRESSIBLE_SURROGATE_NU = 0.3
 
 
 @dataclass(frozen=True)
@@ -34,7 +37,10 @@ class Elasticity:
         model: ``"1d"``, ``"plane_stress"``, ``"3d"`` or ``"3d_standard"`` (the last two differ
             only in the yield set used by :class:`Perzyna`).
         E: Young's modulus (> 0).
-        nu: Poisson's ratio in (-1, 0.5); ignored in 1-D.
+        nu: Poisson's ratio in (-1, 0.5]; ignored in 1-D. ν = 0.5 (incompressible, K = ∞) is a
+            3-D model for the mixed formulation only (:mod:`vpcontact.model.fields`): the
+            kernels then see :meth:`kernel_moduli`, a material with the same shear modulus and
+            a finite bulk modulus, whose volumetric part the mixed formulation replaces.
     """
 
     model: str
@@ -46,12 +52,46 @@ class Elasticity:
             raise InputError(f"unknown model {self.model!r}; expected one of {kernels.MODELS}")
         if not (math.isfinite(self.E) and self.E > 0):
             raise InputError(f"Young's modulus E must be finite and > 0, got {self.E}")
-        if self.model != "1d" and not -1.0 < self.nu < 0.5:
-            raise InputError(f"Poisson's ratio nu must lie in (-1, 0.5), got {self.nu}")
+        if self.model != "1d" and not -1.0 < self.nu <= 0.5:
+            raise InputError(f"Poisson's ratio nu must lie in (-1, 0.5], got {self.nu}")
+        if self.incompressible and self.model not in ("3d", "3d_standard"):
+            raise InputError("Poisson's ratio nu = 0.5 (incompressible) needs a 3-D or "
+                             f"plane-strain model, got {self.model!r}")
+
+    @property
+    def incompressible(self) -> bool:
+        """ν = 0.5: the bulk modulus is infinite."""
+        return self.model != "1d" and self.nu == 0.5
+
+    @property
+    def shear_modulus(self) -> float:
+        """G = E / (2(1 + ν)) (E in 1-D)."""
+        return self.E if self.model == "1d" else self.E / (2.0 * (1.0 + self.nu))
+
+    @property
+    def bulk_modulus(self) -> float:
+        """K = E / (3(1 − 2ν)) (inf for ν = 0.5)."""
+        return math.inf if self.incompressible else self.E / (3.0 * (1.0 - 2.0 * self.nu))
+
+    def kernel_moduli(self) -> tuple[float, float]:
+        """(E, ν) the C++ kernels work with: the material's own, except for ν = 0.5, where they
+        get ν = :data:`INCOMPRESSIBLE_SURROGATE_NU` and the E that keeps G (the deviatoric
+        response, all an isochoric law's flow sees, is then exact; the finite volumetric part
+        is replaced by the mixed formulation's pressure)."""
+        if not self.incompressible:
+            return self.E, self.nu
+        nu = INCOMPRESSIBLE_SURROGATE_NU
+        return 2.0 * self.shear_modulus * (1.0 + nu), nu
+
+    def kernel_bulk_modulus(self) -> float:
+        """The bulk modulus of :meth:`kernel_moduli` (the volumetric stiffness in σ_q)."""
+        E, nu = self.kernel_moduli()
+        return E / (3.0 * (1.0 - 2.0 * nu))
 
     def matrix(self) -> np.ndarray:
-        """E as a Mandel matrix."""
-        return kernels.elasticity_matrix(self.model, E=self.E, nu=self.nu)
+        """E as a Mandel matrix (of :meth:`kernel_moduli`)."""
+        E, nu = self.kernel_moduli()
+        return kernels.elasticity_matrix(self.model, E=E, nu=nu)
 
 
 def _check_scheme(scheme: str) -> None:
@@ -76,6 +116,16 @@ class LinearRate:
         """The update is affine in ε_n, so Newton needs one iteration without contact."""
         return True
 
+    @property
+    def plastic(self) -> bool:
+        """No yield set: G is linear."""
+        return False
+
+    @property
+    def isochoric(self) -> bool:
+        """G has no volumetric part, so the mean stress stays K tr ε (elasticity: a = b = 0)."""
+        return self.a == 0.0 and self.b == 0.0
+
     def explicit_step_limit(self) -> float:
         """Largest stable explicit step: σ is multiplied by (1 + k a) per step, so k < 2/|a|
         for a < 0 (inf for the implicit scheme or a ≥ 0, where nothing oscillates)."""
@@ -87,8 +137,9 @@ class LinearRate:
         """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout);
         ``tangent_out=None`` skips the tangent."""
         el = self.elasticity
+        E, nu = el.kernel_moduli()
         kernels.stress_update_linear_mandel(
-            stress_old, strain_old, strain_new, dt=dt, E=el.E, nu=el.nu, a=self.a, b=self.b,
+            stress_old, strain_old, strain_new, dt=dt, E=E, nu=nu, a=self.a, b=self.b,
             model=el.model, scheme=self.scheme, out=(stress_out, tangent_out),
             tangent=tangent_out is not None)
 
@@ -118,6 +169,19 @@ class Perzyna:
     def linear_in_strain(self) -> bool:
         return self.scheme == "explicit"
 
+    @property
+    def plastic(self) -> bool:
+        """The body flows once its stress leaves the yield set."""
+        return True
+
+    @property
+    def isochoric(self) -> bool:
+        """The 3-D yield sets bound the deviatoric stress only (von Mises; the paper's set is
+        von Mises with another radius) and E is isotropic, so σ − P_K σ is deviatoric and the
+        flow keeps the volume: the mean stress stays K tr ε (3-D models; the 1-D and plane-stress
+        sets are not of that kind)."""
+        return self.elasticity.model in ("3d", "3d_standard")
+
     def explicit_step_limit(self) -> float:
         """Largest stable step of the explicit scheme, 2 μ* / λ_max(E) (inf if implicit).
 
@@ -132,8 +196,9 @@ class Perzyna:
         """Write σ_n and dσ_n/dε_n for all points into the output arrays (Mandel layout);
         ``tangent_out=None`` skips the tangent."""
         el = self.elasticity
+        E, nu = el.kernel_moduli()
         kernels.stress_update_mandel(
-            stress_old, strain_old, strain_new, dt=dt, E=el.E, nu=el.nu, sigma_y=self.sigma_y,
+            stress_old, strain_old, strain_new, dt=dt, E=E, nu=nu, sigma_y=self.sigma_y,
             mu_star=self.mu_star, model=el.model, scheme=self.scheme, out=(stress_out, tangent_out),
             tangent=tangent_out is not None)
 
@@ -165,6 +230,14 @@ class PlaneStrain:
     @property
     def linear_in_strain(self) -> bool:
         return self.law.linear_in_strain
+
+    @property
+    def isochoric(self) -> bool:
+        return self.law.isochoric
+
+    @property
+    def plastic(self) -> bool:
+        return self.law.plastic
 
     def explicit_step_limit(self) -> float:
         """The 3-D law's limit (its stiffest mode, the hydrostatic one, exists in plane strain)."""

@@ -46,16 +46,33 @@ from vpcontact.errors import InputError
 
 def vertex_normals(V: fem.FunctionSpace, facet_tags, tag: int) -> np.ndarray:
     """∫_Γ3 φ_i n da for every node of ``V`` (shape (num_owned + num_ghosts, dim)), summed over
-    ranks and scattered to ghosts; zero off Γ3."""
-    v = ufl.TestFunction(V)
+    ranks and scattered to ghosts; zero off Γ3.
+
+    For P_k, k > 1, the P1 vectors are interpolated into V (a node on an edge gets the mean of
+    its end vertices' vectors): P2's own vertex functions integrate to zero over a triangle, so
+    ∫ φ_i n da would give no normal at the vertices of a 3-D face."""
+    bs = V.dofmap.index_map_bs
+    V1 = V
+    if V.ufl_element().degree() != 1:
+        V1 = fem.VectorFunctionSpace(V.mesh, ("Lagrange", 1), dim=bs)
+    v = ufl.TestFunction(V1)
     ds = ufl.Measure("ds", domain=V.mesh, subdomain_data=facet_tags)(tag)
     vec = fem.petsc.assemble_vector(fem.form(ufl.dot(ufl.FacetNormal(V.mesh), v) * ds))
     vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
     vec.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    if V1 is not V:
+        weighted = fem.Function(V1)
+        vec.copy(weighted.vector)
+        weighted.x.scatter_forward()
+        interpolated = fem.Function(V)
+        interpolated.interpolate(weighted)
+        interpolated.x.scatter_forward()
+        vec.destroy()
+        return interpolated.x.array.reshape(-1, bs).copy()
     with vec.localForm() as local:
         values = local.array.copy()
     vec.destroy()
-    return values.reshape(-1, V.dofmap.index_map_bs)
+    return values.reshape(-1, bs)
 
 
 @dataclass
@@ -121,23 +138,31 @@ def _frame(nu: np.ndarray, slot: int, sign: float, free: np.ndarray) -> np.ndarr
     return Q
 
 
-def rotation_matrix(V: fem.FunctionSpace, fr: Frames) -> PETSc.Mat:
-    """R (AIJ, laid out like the PETSc vectors of V): the identity except the blocks Q_i of the
-    owned contact nodes ``fr.nodes``; ũ = Rᵀu. Identity rows store one entry, frame rows d."""
+def rotation_matrix(V: fem.FunctionSpace, fr: Frames, fields=None) -> PETSc.Mat:
+    """R (AIJ, laid out like the PETSc vectors of V, or like the SNES vector of ``fields``, a
+    :class:`~vpcontact.model.fields.FieldLayout` whose owned u entries come first): the identity
+    except the blocks Q_i of the owned contact nodes ``fr.nodes``; ũ = Rᵀu. Identity rows store
+    one entry, frame rows d."""
     imap = V.dofmap.index_map
     bs = V.dofmap.index_map_bs
     owned = imap.size_local
     start = imap.local_range[0] * bs
+    size = owned * bs
+    if fields is not None:
+        layout = fields.create_vector()
+        start, end = layout.getOwnershipRange()
+        size = end - start
+        layout.destroy()
     keep = fr.nodes < owned
     nodes, blocks = fr.nodes[keep], fr.blocks[keep]
-    counts = np.ones(owned * bs, dtype=np.int32)
+    counts = np.ones(size, dtype=np.int32)
     rows_of = (nodes[:, None] * bs + np.arange(bs)).ravel()
     counts[rows_of] = bs
-    indptr = np.zeros(owned * bs + 1, dtype=np.int32)
+    indptr = np.zeros(size + 1, dtype=np.int32)
     np.cumsum(counts, out=indptr[1:])
     cols = np.empty(indptr[-1], dtype=np.int32)
     vals = np.empty(indptr[-1])
-    identity_rows = np.ones(owned * bs, dtype=bool)
+    identity_rows = np.ones(size, dtype=bool)
     identity_rows[rows_of] = False
     cols[indptr[:-1][identity_rows]] = start + np.flatnonzero(identity_rows)
     vals[indptr[:-1][identity_rows]] = 1.0
@@ -146,7 +171,7 @@ def rotation_matrix(V: fem.FunctionSpace, fr: Frames) -> PETSc.Mat:
             r = node * bs + i
             cols[indptr[r]:indptr[r + 1]] = start + node * bs + np.arange(bs)
             vals[indptr[r]:indptr[r + 1]] = Q[i, :]
-    R = PETSc.Mat().createAIJWithArrays(((owned * bs, None), (owned * bs, None)),
+    R = PETSc.Mat().createAIJWithArrays(((size, None), (size, None)),
                                         (indptr, cols, vals), comm=V.mesh.comm)
     R.assemble()
     return R

@@ -84,12 +84,23 @@ class QuadratureState:
 
     def strain_at_points(self) -> np.ndarray:
         """Evaluate ε(u) at every quadrature point of owned and ghost cells (Mandel, dof order)."""
-        values = self._strain_expr.eval(self._cells).reshape(-1, self.size)
+        return self.at_points(self._strain_expr, self.strain)
+
+    def expression(self, expr) -> fem.Expression:
+        """A compiled UFL expression for :meth:`at_points`, at this rule's points."""
+        return fem.Expression(expr, quadrature_points(self.stress.function_space.mesh, self.degree))
+
+    def at_points(self, expression: fem.Expression, out: np.ndarray | None = None) -> np.ndarray:
+        """Values of a compiled expression at every quadrature point of owned and ghost cells,
+        ``(num_points, components)`` in dof order (into ``out`` when given)."""
+        values = expression.eval(self._cells).reshape(self.num_points, -1)
+        if out is None:
+            out = np.empty_like(values)
         if self._order is None:
-            self.strain[:] = values
+            out[:] = values
         else:
-            self.strain[self._order] = values
-        return self.strain
+            out[self._order] = values
+        return out
 
     def set_stress(self, values: np.ndarray) -> None:
         """Set the current and previous stress from a ``(num_points, size)`` array (e.g. σ0)."""

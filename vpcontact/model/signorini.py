@@ -164,9 +164,6 @@ def contact_dofs(V: fem.FunctionSpace, facet_tags, contact: Signorini,
     aligned = axis_aligned_normal(mesh, facet_tags, contact.tag)
     if aligned is not None and not rotate:
         return _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time)
-    if V.ufl_element().degree() != 1:
-        raise InputError("a Signorini boundary that is not an axis-aligned plane needs P1 "
-                         "displacements (degree = 1)")
     bs = V.dofmap.index_map_bs
     facets = facet_tags.find(contact.tag)
     weighted = vertex_normals(V, facet_tags, contact.tag)
@@ -262,6 +259,11 @@ class ContactMonitor:
 
     At a contact node i, ν_i · R_i = ∫_Γ3 σ_ν φ_i da (R_i the block of the node's components),
     so the nodal contact pressure is σ_ν,i = ν_i · R_i / ∫_Γ3 φ_i da (lumped).
+
+    For P2 the lumped weights fail: a vertex function of P2 integrates to zero over a triangle.
+    The residual is then also tested with the P1 hat functions (each one a combination of P2
+    functions, so ν_a · R¹_a = ∫ σ_ν φ¹_a da exactly), σ_ν is lumped at the vertices as for P1,
+    and a node on an edge gets the mean of its end vertices (the P1 interpolant).
     """
 
     def __init__(self, u: fem.Function, cdofs: ContactDofs, equilibrium_form, facet_tags, tag: int):
@@ -279,6 +281,15 @@ class ContactMonitor:
         self.weights = weights.array[at].copy()
         weights.destroy()
         self.comm = V.mesh.comm
+        self._vertices = None
+        if V.ufl_element().degree() > 1:
+            self._vertices = _VertexPressure(V, equilibrium_form, facet_tags, tag, cdofs)
+
+    def nodal_pressure(self) -> np.ndarray:
+        """σ_ν at the contact nodes (lumped; P2: through the vertices, see the class docstring)."""
+        if self._vertices is not None:
+            return self._vertices.pressure()
+        return self.nodal_forces() / self.weights
 
     def nodal_forces(self) -> np.ndarray:
         """ν_i · R_i at the contact nodes (= ∫ σ_ν φ_i da)."""
@@ -290,7 +301,7 @@ class ContactMonitor:
 
     def report(self, active_tol: float = 1e-10) -> ContactReport:
         forces = self.nodal_forces()
-        pressure = forces / self.weights
+        pressure = self.nodal_pressure()
         gap = self.cdofs.normal_displacement(self.u) - self.cdofs.gap
         scale = max(self.comm.allreduce(float(np.max(np.abs(self.cdofs.gap), initial=0.0)), op=MPI.MAX), 1.0)
         active = int(np.count_nonzero(gap >= -active_tol * scale))
@@ -302,3 +313,67 @@ class ContactMonitor:
             max_pressure=red(float(np.max(pressure, initial=-np.inf)), op=MPI.MAX),
             complementarity=red(float(np.max(np.abs(pressure * gap), initial=0.0)), op=MPI.MAX),
             normal_force=red(float(np.sum(forces)), op=MPI.SUM))
+
+
+class _VertexPressure:
+    """σ_ν lumped at the vertices of Γ3 from the residual tested with P1 hat functions, then
+    interpolated to the nodes of the P_k contact dofs (see :class:`ContactMonitor`)."""
+
+    def __init__(self, V, equilibrium_form, facet_tags, tag: int, cdofs: ContactDofs):
+        mesh = V.mesh
+        bs = V.dofmap.index_map_bs
+        V1 = fem.VectorFunctionSpace(mesh, ("Lagrange", 1), dim=bs)
+        v = equilibrium_form.arguments()[0]
+        v1 = ufl.TestFunction(V1)
+        self._form = fem.form(ufl.replace(equilibrium_form, {v: v1}))
+        self._vec = fem.petsc.create_vector(self._form)
+        ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)(tag)
+        weights = fem.petsc.assemble_vector(fem.form(v1[0] * ds))
+        weights.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        facets = facet_tags.find(tag)
+        vertices = fem.locate_dofs_topological(V1, mesh.topology.dim - 1, facets)
+        vertices = vertices[vertices < V1.dofmap.index_map.size_local]
+        # only the vertices that are contact nodes (not those every Dirichlet part holds, whose
+        # residual is a support reaction)
+        contact_points = {tuple(x) for x in np.round(cdofs.points, 12)}
+        at_vertices = V1.tabulate_dof_coordinates()[vertices]
+        keep = np.array([tuple(x) in contact_points for x in np.round(at_vertices, 12)], dtype=bool)
+        self._vertices = vertices[keep] if len(vertices) else vertices
+        self._weights = weights.array[self._vertices * bs].copy()
+        weights.destroy()
+        if cdofs.axis is not None:
+            normals = np.zeros((len(self._vertices), bs))
+            normals[:, cdofs.axis] = cdofs.sign
+        else:
+            normals = vertex_normals(V1, facet_tags, tag)[self._vertices]
+            normals /= np.linalg.norm(normals, axis=1)[:, None]
+        self._normals = normals
+        self._bs = bs
+        self._p1 = fem.Function(fem.FunctionSpace(mesh, ("Lagrange", 1)))
+        V0, to_parent = V.sub(0).collapse()
+        self._pk = fem.Function(V0)
+        # a node on an edge with one end not a contact node takes the other end's value:
+        # σ_ν = I(p¹) / I(1 at the contact vertices), I the interpolation into P_k
+        self._p1.x.array[self._vertices] = 1.0
+        self._p1.x.scatter_forward()
+        self._pk.interpolate(self._p1)
+        self._share = self._pk.x.array.copy()
+        scalar_of_block = np.empty(V.dofmap.index_map.size_local + V.dofmap.index_map.num_ghosts,
+                                   dtype=np.int32)
+        scalar_of_block[np.asarray(to_parent) // bs] = np.arange(len(to_parent), dtype=np.int32)
+        self._at = scalar_of_block[cdofs.nodes]
+
+    def pressure(self) -> np.ndarray:
+        vec = self._vec
+        with vec.localForm() as local:
+            local.set(0.0)
+        fem.petsc.assemble_vector(vec, self._form)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        blocks = vec.array.reshape(-1, self._bs)[self._vertices]
+        self._p1.x.array[:] = 0.0
+        self._p1.x.array[self._vertices] = np.einsum("ij,ij->i", blocks, self._normals) / self._weights
+        self._p1.x.scatter_forward()
+        self._pk.interpolate(self._p1)
+        share = self._share[self._at]
+        return np.where(share > 0, self._pk.x.array[self._at] / np.where(share > 0, share, 1.0),
+                        0.0)

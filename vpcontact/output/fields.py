@@ -45,9 +45,12 @@ def von_mises(m: np.ndarray, dim: int, s33: np.ndarray | None = None) -> np.ndar
 class CellStress:
     """DG0 fields of the cell-averaged stress tensor and its von Mises norm."""
 
-    def __init__(self, state: QuadratureState, out_of_plane=None):
+    def __init__(self, state: QuadratureState, out_of_plane=None, correction=None):
         self.state = state
         self._out_of_plane = out_of_plane  # () -> σ33 per point (plane strain) or None
+        # () -> what the formulation adds to each normal stress per point (the mixed
+        # formulation's p − m_q), or None (σ_h = σ_q)
+        self._correction = correction
         mesh = state.stress.function_space.mesh
         dim = state.dim
         self.stress = fem.Function(fem.TensorFunctionSpace(mesh, ("DG", 0), shape=(dim, dim)),
@@ -64,14 +67,22 @@ class CellStress:
     def update(self) -> None:
         """Recompute both fields from the current quadrature stress."""
         st = self.state
-        values = st.view(st.stress)[self._q_dofs]                 # (cells, points, n)
-        mean = np.einsum("q,cqn->cn", self._weights, values)
         dim = st.dim
+        values = st.view(st.stress)[self._q_dofs]                 # (cells, points, n)
+        added = self._correction() if self._correction is not None else None
+        if added is not None:
+            added = added.reshape(-1)[self._q_dofs]
+            values = values.copy()
+            values[..., :dim] += added[..., None]
+        mean = np.einsum("q,cqn->cn", self._weights, values)
         self.stress.x.array.reshape(-1, dim * dim)[self._dg_dofs] = \
             mandel_to_full(mean, dim).reshape(-1, dim * dim)
         s33 = None
         if self._out_of_plane is not None and len(self._out_of_plane()) == st.num_points:
-            s33 = np.einsum("q,cq->c", self._weights, self._out_of_plane()[self._q_dofs])
+            s33_points = self._out_of_plane()[self._q_dofs]
+            if added is not None:
+                s33_points = s33_points + added
+            s33 = np.einsum("q,cq->c", self._weights, s33_points)
         self.von_mises.x.array[self._dg_dofs] = von_mises(mean, dim, s33)
 
 
@@ -169,8 +180,7 @@ class ContactHistory:
         """Nodal σ_ν at this rank's contact nodes (collective for Signorini)."""
         if self._pressure is not None:
             return self._pressure(self.problem.u)
-        mon = self.problem.contact_monitor
-        return mon.nodal_forces() / mon.weights
+        return self.problem.contact_monitor.nodal_pressure()
 
     def record(self, t: float) -> None:
         cd = self.cdofs

@@ -82,7 +82,8 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     if restart is not None:
         restore_control(control, restart)
     comm = problem.mesh.comm
-    cells = CellStress(problem.state, getattr(problem.law, "out_of_plane_stress", None))
+    cells = CellStress(problem.state, getattr(problem.law, "out_of_plane_stress", None),
+                       problem.stress_correction_at_points)
     series = None
     if out is not None:
         if comm.rank == 0:
@@ -94,7 +95,9 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     start = _time.perf_counter()  # wall_time covers everything output_time counts
     if out is not None and xdmf:
         with _timed(record, out):
-            series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells, extra=xdmf_extra,
+            extra = [(f, lambda: None) for f in problem.fields.output_functions()]
+            series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells,
+                                extra=extra + list(xdmf_extra),
                                 append=restart is not None)
     if history is None and problem.contact_dofs is not None:
         history = ContactHistory(problem)

@@ -127,18 +127,29 @@ class Session:
         return ContactHistory(problem, cdofs, pressure)
 
     def _pressure_field(self, history):
-        """Nodal contact pressure σ_ν as a P1 field (zero off Γ3), for P1 displacements."""
+        """Nodal contact pressure σ_ν as a P1 field (zero off Γ3; P_k: its vertex values)."""
         problem = self.model.problem
-        if history is None or problem.V.ufl_element().degree() != 1:
+        if history is None:
             return ()
         field = fem.Function(fem.FunctionSpace(problem.mesh, ("Lagrange", 1)),
                              name="contact_pressure")
-        bs = problem.V.dofmap.index_map_bs
-        nodes = history.cdofs.dofs // bs  # vector P1 dof -> its node (the scalar P1 dof)
+        V = problem.V
+        bs = V.dofmap.index_map_bs
+        nodes = history.cdofs.dofs // bs  # vector dof -> its node (the scalar dof)
+        nodal = field
+        if V.ufl_element().degree() != 1:
+            scalar, to_parent = V.sub(0).collapse()
+            of_node = np.empty(len(V.tabulate_dof_coordinates()), dtype=np.int32)
+            of_node[np.asarray(to_parent) // bs] = np.arange(len(to_parent), dtype=np.int32)
+            nodes = of_node[nodes]
+            nodal = fem.Function(scalar)
 
         def refresh():
-            field.x.array[nodes] = history.local_pressure()
-            field.x.scatter_forward()
+            nodal.x.array[nodes] = history.local_pressure()
+            nodal.x.scatter_forward()
+            if nodal is not field:
+                field.interpolate(nodal)
+                field.x.scatter_forward()
 
         return [(field, refresh)]
 

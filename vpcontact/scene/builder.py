@@ -73,6 +73,7 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
         contact, contact_tag = _contact(scene, part_tags, mesh, facet_tags)
         problem = QuasistaticProblem(mesh, facet_tags, law, loads=loads, dirichlet=dirichlet,
                                      contact=contact, degree=scene.degree,
+                                     formulation=scene.formulation,
                                      petsc_options=dict(scene.solver.petsc_options),
                                      predictor=scene.solver.predictor,
                                      time_scheme=scene.time.scheme)

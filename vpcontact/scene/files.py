@@ -80,6 +80,7 @@ class Scene:
         contact: the contact condition (type ``"none"`` without contact).
         initial: u_0 and σ_0.
         time: T, k and the allowed step halvings.
+        formulation: ``"displacement"`` or ``"mixed"`` (resolved from ``"auto"``).
         degree: polynomial degree of the displacement.
         solver: predictor and PETSc options.
         output: what to write.
@@ -101,6 +102,7 @@ class Scene:
     degree: int
     solver: SolverSpec
     output: OutputSpec
+    formulation: str = "displacement"
     hash: str = field(default="", compare=False)
     locator: Locator | None = field(default=None, compare=False, repr=False)
 

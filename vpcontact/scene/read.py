@@ -18,6 +18,7 @@ from vpcontact.scene.locate import join
 from vpcontact.scene.physics import read_contact, read_law
 from vpcontact.scene.schema import (REQUIRED, Report, Table, at_least, between, fmt, greater, type_name,
                                     unknown_key)
+from vpcontact.model.locking import FORMULATIONS, locking_expected
 from vpcontact.scene.specs import (BUILTIN_MESHES, CELL_TYPES, DIAGONALS, BoundaryPart,
                                    BoxSelector, ContactSpec, InitialSpec, LoadSpec, MaterialSpec,
                                    MeshSpec, OutputSpec, PlaneSelector, PointLoad, SolverSpec,
@@ -58,6 +59,7 @@ def read_scene(data: dict, report: Report, base_dir: Path, default_name: str) ->
     boundaries = read_boundaries(top, mesh)
     contact = read_contact(top, dim)
     check_parts(report, boundaries, contact, "contact" in data)
+    material, law = read_material(top, dim), read_law(top, dim)
     return {
         "name": top.string("name", default_name, pattern=SCENE_NAME),
         "description": top.string("description", ""),
@@ -65,12 +67,12 @@ def read_scene(data: dict, report: Report, base_dir: Path, default_name: str) ->
         "mesh": mesh,
         "boundaries": boundaries,
         "loads": read_loads(top, dim),
-        "material": read_material(top, dim),
-        "law": read_law(top, dim),
+        "material": material,
+        "law": law,
         "contact": contact,
         "initial": read_initial(top, dim),
         "time": read_time(top),
-        "degree": top.section("discretization", ("degree",)).choice("degree", (1, 2), 1),
+        **read_discretization(top, dim, material, law),
         "solver": read_solver(top),
         "output": read_output(top, contact),
     }
@@ -290,7 +292,8 @@ def read_material(top: Table, dim: int | None) -> MaterialSpec:
     if dim == 1:
         t.forbid("nu", "Poisson's ratio is not used in 1-D")
     else:  # required in 2-D and 3-D (optional while the dimension is unknown)
-        nu = t.number("nu", None if dim is None else REQUIRED, check=between(-1.0, 0.5))
+        # ν = 0.5 only with the mixed formulation (checked with [discretization])
+        nu = t.number("nu", None if dim is None else REQUIRED, check=between(-1.0, 0.5, "(]"))
     if dim == 2:
         plane = t.choice("plane", ("stress", "strain"), "stress")
     elif dim is not None:
@@ -307,6 +310,43 @@ def read_initial(top: Table, dim: int | None) -> InitialSpec:
 
 
 # -- time, solver, output -------------------------------------------------------------------
+
+def read_discretization(top: Table, dim: int | None, material: MaterialSpec,
+                        law: LawSpec) -> dict[str, Any]:
+    """``[discretization]``: the formulation and the displacement degree, resolved.
+
+    ``formulation = "auto"`` (the default) is ``"mixed"`` (Taylor–Hood P2–P1, free of
+    volumetric locking) where P_k displacements lock — 3-D or plane strain with Perzyna's
+    isochoric flow, or elasticity with ν ≥ 0.45 (:func:`vpcontact.model.fields.locking_expected`)
+    — unless ``degree = 1`` is asked for (the paper's P1/P0 scheme), else ``"displacement"``.
+    """
+    t = top.section("discretization", ("degree", "formulation"))
+    formulation = t.choice("formulation", ("auto",) + FORMULATIONS, "auto")
+    degree = t.choice("degree", (1, 2), None)
+    three_d = dim == 3 or (dim == 2 and material.plane == "strain")
+    constants = [law.a, law.b]
+    isochoric = law.type in ("elastic", "perzyna") or (
+        law.type == "linear" and all(c is not None and c.value() == 0.0 for c in constants))
+    nu = material.nu if material.nu is not None else 0.0
+    if formulation == "auto":
+        locking = locking_expected(three_d, isochoric, law.type == "perzyna", nu)
+        formulation = "mixed" if locking and degree != 1 else "displacement"
+    if formulation == "mixed":
+        if dim is not None and not three_d:
+            t.add("formulation", "the mixed formulation is for 3-D and plane-strain bodies "
+                                 "(in plane stress and 1-D nothing locks)")
+        elif law.type is not None and not isochoric:
+            t.add("formulation", "the mixed formulation needs a law whose flow keeps the volume "
+                                 "(elastic or perzyna); use formulation = \"displacement\"")
+        if degree == 1:
+            t.add("degree", "the mixed formulation is Taylor–Hood (P2 displacements, P1 "
+                            "pressure): use degree = 2, or leave degree out")
+        degree = 2
+    elif nu == 0.5:
+        t.report.add("material.nu", "nu = 0.5 (incompressible) needs [discretization] "
+                                    "formulation = \"mixed\" (3-D or plane strain)")
+    return {"formulation": formulation, "degree": degree if degree is not None else 1}
+
 
 def read_time(top: Table) -> TimeSpec:
     """``[time]``: T > 0, 0 < k ≤ T, max_cuts, scheme, tolerance."""

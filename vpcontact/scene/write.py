@@ -127,7 +127,7 @@ def dump(scene: Any) -> str:
     time = scene.time
     blocks += _table("time", {"T": time.T, "k": time.k, "max_cuts": time.max_cuts,
                                      "scheme": time.scheme, "tolerance": time.tolerance})
-    blocks += _table("discretization", {"degree": scene.degree})
+    blocks += _table("discretization", {"formulation": scene.formulation, "degree": scene.degree})
     blocks += _table("solver", {"predictor": scene.solver.predictor,
                                 "petsc_options": scene.solver.petsc_options})
     output = scene.output

@@ -31,6 +31,8 @@ from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor, past_nodes
 from vpcontact.errors import InputError, NonFiniteStateError, ObstacleOutOfReach, StepRejected
 from vpcontact.solver.step_solver import StepSolver
+from vpcontact.model.fields import Displacement, DisplacementPressure
+from vpcontact.model.locking import check_formulation, locks
 from vpcontact.model.quadrature import QuadratureState
 from vpcontact.model.frames import rotation_matrix
 from vpcontact.model.signorini import (ContactMonitor, Signorini, contact_dofs, contact_gap,
@@ -66,7 +68,13 @@ class QuasistaticProblem:
             rigid motion.
         loads: body force and tractions.
         contact: contact condition on Γ3 or None.
-        degree: polynomial degree of the displacement (1 = the paper's P1/P0 pairing).
+        degree: polynomial degree of the displacement (1 = the paper's P1/P0 pairing; None: 1,
+            or 2 for the mixed formulation).
+        formulation: "displacement" (u alone) or "mixed" (Taylor–Hood P2–P1 displacement and
+            pressure, free of volumetric locking; see :mod:`vpcontact.model.fields`). None:
+            mixed where P_k displacements lock (:func:`~vpcontact.model.fields.locks`: 3-D or
+            plane strain with Perzyna's isochoric flow, or ν ≥ 0.45) unless ``degree`` is 1,
+            else displacement.
         petsc_options: options for the SNES of each step.
         options_prefix: PETSc options prefix of that SNES.
         predictor: initial guess of each step's Newton iteration. "linear" extrapolates the last
@@ -85,11 +93,11 @@ class QuasistaticProblem:
     """
 
     def __init__(self, mesh, facet_tags, law, clamped_tag: Optional[int] = None,
-                 loads: Loads = Loads(), contact=None, degree: int = 1,
+                 loads: Loads = Loads(), contact=None, degree: Optional[int] = None,
                  petsc_options: Optional[dict] = None, options_prefix: Optional[str] = None,
                  predictor: str = "linear", unstable_steps: str = "error",
                  time_scheme: str = "euler", dirichlet: Sequence[Dirichlet] = (),
-                 rotate_contact: Optional[bool] = None):
+                 rotate_contact: Optional[bool] = None, formulation: Optional[str] = None):
         if predictor not in ("linear", "none"):
             raise InputError(f"predictor must be 'linear' or 'none', got {predictor!r}")
         if unstable_steps not in ("error", "warn"):
@@ -102,6 +110,16 @@ class QuasistaticProblem:
         self.law = law
         self.contact = contact
         dim = mesh.topology.dim
+        if formulation is None:  # P1 asked for explicitly: the paper's displacement scheme
+            formulation = "mixed" if locks(law) and degree != 1 else "displacement"
+        self.formulation = check_formulation(formulation)
+        mixed = self.formulation == "mixed"
+        if degree is None:
+            degree = 2 if mixed else 1
+        el = getattr(law, "elasticity", None)
+        if not mixed and el is not None and el.incompressible:
+            raise InputError("Poisson's ratio nu = 0.5 (incompressible) needs the mixed "
+                             "formulation (formulation = \"mixed\")")
         self.V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree), dim=dim)
         self.u = fem.Function(self.V, name="displacement")
         self.time = fem.Constant(mesh, 0.0)
@@ -125,13 +143,16 @@ class QuasistaticProblem:
 
         # Stress quadrature: exact for ε(v) of degree-p displacements paired with the stress.
         self.state = QuadratureState(self.u, degree=stress_quadrature_degree(mesh, degree))
+        self.fields = (DisplacementPressure(self.u, law, self.state) if mixed
+                       else Displacement(self.u))
+        self.p: Optional[fem.Function] = getattr(self.fields, "p", None)  # mixed: the pressure
         v, du = ufl.TestFunction(self.V), ufl.TrialFunction(self.V)
         n_q = self.state.size
         dxq = self.state.measure
-        sigma = as_mandel_vector(self.state.stress, n_q)
+        sigma = self.fields.stress(as_mandel_vector(self.state.stress, n_q))
         tangent = as_mandel_matrix(self.state.tangent, n_q)
         residual = ufl.dot(sigma, mandel_strain(v, dim)) * dxq
-        jacobian = ufl.dot(ufl.dot(tangent, mandel_strain(du, dim)), mandel_strain(v, dim)) * dxq
+        jacobian = ufl.dot(self.fields.tangent(tangent, du), mandel_strain(v, dim)) * dxq
 
         x = ufl.SpatialCoordinate(mesh)
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
@@ -168,6 +189,7 @@ class QuasistaticProblem:
         # Only what is called for: a constitutive update linear in ε with no compliance term
         # has a Jacobian that changes with the step size only; it is factorized once per size.
         constant_jacobian = law.linear_in_strain and (contact is None or isinstance(contact, Signorini))
+        self.fields.compile(residual, jacobian)
         self.contact_dofs = None
         self.contact_monitor = None
         rotation = None
@@ -176,8 +198,8 @@ class QuasistaticProblem:
                                              exclude=self.dirichlet.prescribed,
                                              rotate=rotate_contact)
             if self.contact_dofs.rotated:
-                rotation = rotation_matrix(self.V, self.contact_dofs.frames)
-        self.solver = StepSolver(residual, jacobian, self.u, self.bcs, self._update_stress,
+                rotation = rotation_matrix(self.V, self.contact_dofs.frames, self.fields)
+        self.solver = StepSolver(self.fields, self.bcs, self._update_stress,
                                  options, options_prefix, scale=scale,
                                  load=sum(external[1:], external[0]) if external else None,
                                  point_forces=self._point_forces if self._point_loads else None,
@@ -190,10 +212,12 @@ class QuasistaticProblem:
         if contact is not None:
             self._contact_nodes = _unrolled(self.V, fem.locate_dofs_topological(
                 self.V, dim - 1, facet_tags.find(contact.tag)), self.dirichlet.prescribed)
+        self._correction_expr = None  # compiled on first use (outputs of the mixed formulation)
         self._contact_active = False  # after the last accepted step
         self.step_index = 0
         self.reports: list[StepReport] = []
         self._u_prev: Optional[np.ndarray] = None  # u_{n-1}, for the predictor
+        self._others_prev: list = []  # the other fields at t_{n-1} (the mixed formulation's p)
         self._dt_prev = 0.0
         self._u_prev2: Optional[np.ndarray] = None  # u_{n-2}, for the BDF2 error estimate
         self._dt_prev2 = 0.0
@@ -239,10 +263,15 @@ class QuasistaticProblem:
         self._check_stability(dt)
         t_new = float(self.time.value) + dt
         n = self.step_index + 1
+        if n == 1 and hasattr(self.fields, "capture_initial_state"):
+            self.fields.capture_initial_state(self.state)
         u_old = self.u.x.array.copy()
+        others_old = [f.x.array.copy() for f in self.fields.functions[1:]]
         if self.predictor == "linear" and self._u_prev is not None:
             # Ghost entries are extrapolated from ghost entries: consistent without a scatter.
             self.u.x.array[:] += (dt / self._dt_prev) * (u_old - self._u_prev)
+            for f, old, prev in zip(self.fields.functions[1:], others_old, self._others_prev):
+                f.x.array[:] += (dt / self._dt_prev) * (old - prev)
         self.dt = dt
         self.solver.dt = dt  # the constant-Jacobian reuse is keyed on the law's effective step
         if self._bdf2 is not None:
@@ -270,6 +299,8 @@ class QuasistaticProblem:
                 raise StepRejected(ratio, order, t_new)
         except Exception:
             self.u.x.array[:] = u_old
+            for f, old in zip(self.fields.functions[1:], others_old):
+                f.x.array[:] = old
             self.time.value = t_new - dt
             self.state.rollback()
             raise
@@ -281,6 +312,7 @@ class QuasistaticProblem:
         self._contact_active = self._any_contact_active()
         self._u_prev2, self._dt_prev2 = self._u_prev, self._dt_prev
         self._u_prev, self._dt_prev = u_old, dt
+        self._others_prev = others_old
         self.step_index = n
         report = StepReport(n, t_new, its, self.solver.last_reason, ratio, order)
         self.reports.append(report)
@@ -340,6 +372,9 @@ class QuasistaticProblem:
         arrays = {"u": self.u.x.array, "stress": st.stress.x.array,
                   "stress_old": st.stress_old.x.array, "strain_old": st.strain_old.x.array,
                   "tangent": st.tangent.x.array}
+        arrays.update({f"field_{k}": f.x.array for k, f in self.fields.saved_functions().items()})
+        for i, prev in enumerate(self._others_prev):
+            arrays[f"_others_prev{i}"] = prev
         for name in ("_u_prev", "_u_prev2"):
             if getattr(self, name) is not None:
                 arrays[name] = getattr(self, name)
@@ -359,13 +394,20 @@ class QuasistaticProblem:
     def restore(self, scalars: dict, arrays: dict) -> None:
         """Continue from :meth:`checkpoint` (same mesh, partition and scene)."""
         st = self.state
-        for name, function in (("u", self.u), ("stress", st.stress), ("stress_old", st.stress_old),
-                               ("strain_old", st.strain_old), ("tangent", st.tangent)):
+        saved = [(f"field_{k}", f) for k, f in self.fields.saved_functions().items()]
+        for name, function in [("u", self.u), ("stress", st.stress), ("stress_old", st.stress_old),
+                               ("strain_old", st.strain_old), ("tangent", st.tangent)] + saved:
+            if name not in arrays:
+                raise InputError(f"the checkpoint has no {name}: it was written by another "
+                                 "formulation")
             if arrays[name].shape != function.x.array.shape:
                 raise InputError(f"the checkpoint's {name} has {arrays[name].size} values here, "
                                  f"the problem {function.x.array.size}: another mesh or partition")
             function.x.array[:] = arrays[name]
         self._u_prev = arrays["_u_prev"].copy() if "_u_prev" in arrays else None
+        self._others_prev = [arrays[f"_others_prev{i}"].copy()
+                             for i in range(len(self.fields.functions) - 1)
+                             if f"_others_prev{i}" in arrays]
         self._u_prev2 = arrays["_u_prev2"].copy() if "_u_prev2" in arrays else None
         law_state = {k[4:]: v for k, v in arrays.items() if k.startswith("law_")}
         if law_state:
@@ -418,6 +460,16 @@ class QuasistaticProblem:
             return float(np.linalg.norm(contact.translation(t)))
         return self.dirichlet.mean_moving_value()
 
+    def stress_correction_at_points(self) -> Optional[np.ndarray]:
+        """What the formulation adds to each normal stress of the kernels' σ_q at the quadrature
+        points (the mixed formulation's p − m_q, so that σ_h = σ_q + that · 1), or None."""
+        correction = self.fields.stress_correction()
+        if correction is None:
+            return None
+        if self._correction_expr is None:
+            self._correction_expr = self.state.expression(correction)
+        return self.state.at_points(self._correction_expr)[:, 0]
+
     def _point_forces(self):
         t = float(self.time.value)
         dofs = [p.dofs for p in self._point_loads]
@@ -432,7 +484,8 @@ class QuasistaticProblem:
         return self.mesh.comm.allreduce(local, op=MPI.LOR)
 
     def _check_finite(self, t: float, n: int) -> None:
-        local_ok = bool(np.isfinite(self.u.x.array).all() and np.isfinite(self.state.stress.x.array).all())
+        local_ok = bool(all(np.isfinite(f.x.array).all() for f in self.fields.functions)
+                        and np.isfinite(self.state.stress.x.array).all())
         if not self.mesh.comm.allreduce(local_ok, op=MPI.LAND):
             raise NonFiniteStateError(f"time step {n} (t = {t:.6g}) produced NaN/Inf in the state")
 

@@ -30,16 +30,17 @@ class StepSolver:
     """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
 
     Args:
-        residual: UFL form F(u; v).
-        jacobian: UFL form J(u; du, v).
-        u: the unknown; holds the initial guess before :meth:`solve` and the solution after.
+        fields: the unknowns, their compiled forms and their layout in the SNES vector
+            (:mod:`vpcontact.model.fields`); they hold the initial guess before :meth:`solve`
+            and the solution after.
         bcs: Dirichlet conditions (homogeneous or not).
         refresh: called after the iterate is copied into ``u`` and before assembling; updates
             coefficients that depend on ``u`` (e.g. quadrature stresses).
         petsc_options: options set under the prefix (override :data:`DEFAULT_OPTIONS`).
         options_prefix: PETSc options prefix; default ``vpcontact_step_<k>_`` with ``k`` counting
             solvers created (identical on all ranks since creation is collective).
-        scale: SNES works on x = u / scale. PETSc's VI solvers decide whether a bound is active
+        scale: SNES works on x = u / scale (and the layout's own scale for other fields, see
+            :meth:`~vpcontact.model.fields.FieldLayout.column_scales`). PETSc's VI solvers decide whether a bound is active
             with an absolute tolerance of 1e-8 in the units of x, which is meaningless for
             displacements of 1e-9 m (E ~ 1e8 Pa); a power-of-two scale makes that tolerance
             negligible without any rounding. Residuals stay in physical units.
@@ -50,13 +51,13 @@ class StepSolver:
         constant_jacobian: the Jacobian depends on the step size only (a constitutive update
             linear in ε and no nonlinear contact term): it is assembled once per step size and
             the linear solver's factorization is reused across iterations and steps.
-        rotation: orthogonal R (laid out like u's PETSc vector) of a change of variables
+        rotation: orthogonal R (laid out like the SNES vector) of a change of variables
             u = R ũ: SNES then solves Rᵀ F(R ũ) = 0 with Jacobian Rᵀ J R (:meth:`Mat.PtAP`),
             bounds apply to ũ (local frames at contact nodes, :mod:`vpcontact.model.frames`).
             Dirichlet rows must be left alone by R. None: SNES works on u itself.
     """
 
-    def __init__(self, residual, jacobian, u: fem.Function, bcs: Sequence[fem.DirichletBCMetaClass],
+    def __init__(self, fields, bcs: Sequence[fem.DirichletBCMetaClass],
                  refresh: Callable[[], None], petsc_options: Optional[dict] = None,
                  options_prefix: Optional[str] = None, scale: float = 1.0, load=None,
                  point_forces: Optional[Callable[[], tuple]] = None,
@@ -64,31 +65,33 @@ class StepSolver:
         if not scale > 0:
             raise ValueError(f"scale must be > 0, got {scale}")
         self.scale = float(scale)
-        self.u = u
+        self.fields = fields
+        self.u = fields.u
+        u = self.u
         self.bcs = list(bcs)
         self._refresh = refresh
-        self._F = fem.form(residual)
-        self._J = fem.form(jacobian)
-        self._b = fem_petsc.create_vector(self._F)
+        self._b = fields.create_vector()
+        self._xp = fields.physical_vector()  # the physical unknowns (u's own vector for u alone)
+        self._columns = fields.column_scales(self.scale)  # None: every column scaled by scale
         self._load = fem.form(load) if load is not None else None
-        self._load_vec = (fem_petsc.create_vector(self._F)
-                          if load is not None or point_forces is not None else None)
+        self._load_vec = u.vector.duplicate() if load is not None or point_forces is not None else None
+        self._bc_dofs = np.concatenate([bc.dof_indices()[0] for bc in self.bcs] or
+                                       [np.zeros(0, dtype=np.int32)])
         self._force_scale = 0.0
         self._point_forces = point_forces
         self.constant_jacobian = constant_jacobian
         self._jacobian_dt: Optional[float] = None  # step size of the assembled constant Jacobian
         self._restored_jacobian_dt: Optional[float] = None  # the same before a restart
         self.dt = 0.0  # set by the owner before each solve (only the constant-Jacobian reuse reads it)
-        self._A = fem_petsc.create_matrix(self._J)
+        self._A = fields.create_matrix()
         self._R = rotation
         self._b_phys = self._A_phys = None  # physical-frame residual and Jacobian (with R)
         if rotation is not None:
-            self._b_phys = fem_petsc.create_vector(self._F)
+            self._b_phys = fields.create_vector()
             self._A_phys = self._A
-            fem_petsc.assemble_matrix(self._A_phys, self._J, bcs=self.bcs)  # a pattern for PtAP
-            self._A_phys.assemble()
+            fields.assemble_jacobian(self._A_phys, self.bcs)  # a pattern for PtAP
             self._A = self._A_phys.PtAP(rotation)
-        self._x = u.vector.duplicate()
+        self._x = fields.create_vector()
         comm = u.function_space.mesh.comm
         self.prefix = options_prefix or f"vpcontact_step_{next(_counter)}_"
 
@@ -160,6 +163,8 @@ class StepSolver:
         if not self.snes.getType().startswith("vi"):
             raise ValueError(f"SNES type {self.snes.getType()!r} cannot take variable bounds; "
                              "use vinewtonrsls or vinewtonssls")
+        lower, upper = (self._embedded(lower, PETSc.NINFINITY),
+                        self._embedded(upper, PETSc.INFINITY))
         for vec in (lower, upper):
             finite = np.abs(vec.array) < PETSc.INFINITY
             vec.array[finite] /= self.scale
@@ -180,9 +185,19 @@ class StepSolver:
         self._setup(self._free_snes)
         _forget(free_prefix, {**self._options, "snes_type": 0, "snes_linesearch_type": 0})
 
+    def _embedded(self, vec_u: PETSc.Vec, fill: float) -> PETSc.Vec:
+        """A bound on u as a vector of the SNES layout (other fields: ``fill``); ``vec_u`` is
+        destroyed when a new vector is made."""
+        vec = self.fields.embed(vec_u, fill)
+        if vec.handle != vec_u.handle:
+            vec_u.destroy()
+        return vec
+
     def update_bounds(self, lower: PETSc.Vec, upper: PETSc.Vec) -> None:
         """New values (physical units) for the bounds given to :meth:`set_bounds` (a moving
         obstacle); the vectors passed are destroyed."""
+        lower, upper = (self._embedded(lower, PETSc.NINFINITY),
+                        self._embedded(upper, PETSc.INFINITY))
         for new, old in zip((lower, upper), self._bounds):
             finite = np.abs(new.array) < PETSc.INFINITY
             new.array[finite] /= self.scale
@@ -223,7 +238,8 @@ class StepSolver:
             self.lagged_lu.lag_allowed = self._lag_allowed
         else:
             self.lagged_lu = LaggedMultigrid(self.snes, self._A, self.prefix + "lagged_",
-                                             rigid_body_modes(self.u.function_space, self._R),
+                                             rigid_body_modes(self.u.function_space, self._R,
+                                                              layout=self.fields),
                                              inner)
         ksp = self.snes.getKSP()
         ksp.setType("python")
@@ -280,33 +296,36 @@ class StepSolver:
             return
         start = _time.perf_counter()
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        xp = self._xp
         if self._R is None:
-            x.copy(self.u.vector)
+            x.copy(xp)
         else:
-            self._R.mult(x, self.u.vector)
-        if self.scale != 1.0:
-            self.u.vector.scale(self.scale)
-        self.u.vector.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+            self._R.mult(x, xp)
+        if self._columns is not None:
+            xp.pointwiseMult(xp, self._columns)
+        elif self.scale != 1.0:
+            xp.scale(self.scale)
+        self.fields.to_functions(xp)
         self._refresh()
         self.kernel_calls += 1
         x.copy(self._loaded)
         self._loaded_valid = True
         self.timings["kernel"] += _time.perf_counter() - start
 
+    def _free_point_forces(self):
+        """(dofs, values) of the point forces at dofs no Dirichlet condition prescribes, or None."""
+        if self._point_forces is None:
+            return None
+        dofs, values = self._point_forces()
+        keep = ~np.isin(dofs, self._bc_dofs)
+        return dofs[keep], values[keep]
+
     def _residual(self, snes, x, b_snes) -> None:
         self._load_iterate(x)
         start = _time.perf_counter()
         b = b_snes if self._R is None else self._b_phys
-        with b.localForm() as b_local:
-            b_local.set(0.0)
-        fem_petsc.assemble_vector(b, self._F)
-        u = self.u.vector  # physical units: b = u - g on Dirichlet rows
-        fem_petsc.apply_lifting(b, [self._J], bcs=[self.bcs], x0=[u], scale=-1.0)
-        b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        if self._point_forces is not None:
-            dofs, values = self._point_forces()
-            b.array[dofs] -= values
-        fem_petsc.set_bc(b, self.bcs, u, -1.0)
+        # physical units: b = u - g on Dirichlet rows
+        self.fields.assemble_residual(b, self._xp, self.bcs, self._free_point_forces())
         if self._R is not None:
             self._R.multTranspose(b, b_snes)
         self.timings["residual"] += _time.perf_counter() - start
@@ -317,10 +336,10 @@ class StepSolver:
         self._load_iterate(x)
         start = _time.perf_counter()
         A = A_snes if self._R is None else self._A_phys
-        A.zeroEntries()
-        fem_petsc.assemble_matrix(A, self._J, bcs=self.bcs)
-        A.assemble()
-        if self.scale != 1.0:
+        self.fields.assemble_jacobian(A, self.bcs)
+        if self._columns is not None:
+            A.diagonalScale(None, self._columns)  # d(residual)/dx = d(residual)/du * scales
+        elif self.scale != 1.0:
             A.scale(self.scale)  # d(residual)/dx = d(residual)/du * scale
         if self._R is not None:
             A.PtAP(self._R, result=A_snes)
@@ -353,11 +372,14 @@ class StepSolver:
                 self._load_vec.array[dofs] += values
             fem_petsc.set_bc(self._load_vec, self.bcs, scale=0.0)
             self._force_scale = self._load_vec.norm()
+        self.fields.from_functions(self._xp)
         if self._R is None:
-            self.u.vector.copy(self._x)
+            self._xp.copy(self._x)
         else:
-            self._R.multTranspose(self.u.vector, self._x)
-        if self.scale != 1.0:
+            self._R.multTranspose(self._xp, self._x)
+        if self._columns is not None:
+            self._x.pointwiseDivide(self._x, self._columns)
+        elif self.scale != 1.0:
             self._x.scale(1.0 / self.scale)
         self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
         its = 0
@@ -397,6 +419,6 @@ class StepSolver:
     def destroy(self) -> None:
         """Free the PETSc objects."""
         for obj in (self.snes, self._free_snes, self._A, self._b, self._x, self._loaded,
-                    self._load_vec, self._A_phys, self._b_phys):
+                    self._load_vec, self._A_phys, self._b_phys, self._columns):
             if obj is not None:
                 obj.destroy()

@@ -393,10 +393,12 @@ class LaggedMultigrid(_ReducedSolve):
         self._ready = True
 
 
-def rigid_body_modes(V, rotation: Optional[PETSc.Mat] = None) -> PETSc.NullSpace:
+def rigid_body_modes(V, rotation: Optional[PETSc.Mat] = None, layout=None) -> PETSc.NullSpace:
     """Orthonormal rigid-body modes (translations and rotations) of a vector P_k space, in the
     layout of its PETSc vectors (owned entries): GAMG's near null space for elasticity. With
-    ``rotation`` R (unknowns ũ = Rᵀu in local frames), the modes are written in those frames."""
+    ``layout`` (a :class:`~vpcontact.model.fields.FieldLayout`), in the layout of its SNES
+    vector (zero in fields other than u). With ``rotation`` R (unknowns ũ = Rᵀu in local
+    frames), the modes are written in those frames."""
     bs = V.dofmap.index_map_bs
     owned = V.dofmap.index_map.size_local
     x = V.tabulate_dof_coordinates()[:owned]
@@ -412,6 +414,13 @@ def rigid_body_modes(V, rotation: Optional[PETSc.Mat] = None) -> PETSc.NullSpace
     for field in fields:
         vec = PETSc.Vec().createMPI((owned * bs, None), comm=comm)
         vec.array[:] = field.ravel()
+        if layout is not None:
+            full = layout.embed(vec, 0.0)
+            if full.handle != vec.handle:
+                vec.destroy()
+                vec = PETSc.Vec().createMPI((full.getLocalSize(), None), comm=comm)
+                vec.array[:] = full.getArray(readonly=True)
+                full.destroy()
         if rotation is not None:
             physical = vec.copy()
             rotation.multTranspose(physical, vec)

@@ -215,7 +215,7 @@ def profile(problem, centre: np.ndarray) -> ContactProfile:
     """Gather the Signorini state of ``problem`` on every rank, as distances from ``centre``."""
     comm = problem.mesh.comm
     cd, monitor = problem.contact_dofs, problem.contact_monitor
-    pressure = -monitor.nodal_forces() / monitor.weights
+    pressure = -monitor.nodal_pressure()
     gap = cd.normal_displacement(problem.u) - cd.gap
     scale = max(comm.allreduce(float(np.max(np.abs(problem.u.x.array), initial=0.0)), op=MPI.MAX),
                 1e-300)

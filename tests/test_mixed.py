@@ -1,0 +1,192 @@
+# SPDX-License-Identifier: MIT
+"""The mixed (Taylor–Hood P2–P1) formulation against closed forms and the displacement one.
+
+* Homogeneous states are reproduced exactly by every formulation (P1, P2, mixed): a uniaxial
+  relaxation test of a Perzyna cube on rollers (σ uniform, σ_yy = σ_zz = 0, σ_xx what the
+  kernel gives for the computed strain history at one point) and hydrostatic compression
+  (σ = p I with p = 3K ε_v, the pressure field constant).
+* Incompressible elasticity (ν = 0.5) is a valid problem for the mixed formulation: the uniaxial
+  test keeps the volume (lateral strain −ε/2) with σ_xx = E ε; the displacement formulation
+  refuses it.
+* The default formulation: mixed where displacements lock (3-D or plane-strain Perzyna, or
+  ν ≥ 0.45) unless P1 is asked for, displacement otherwise.
+* The paper's 3-D test with the mixed formulation: contact conditions hold every step.
+"""
+
+import numpy as np
+import pytest
+from dolfinx import mesh as dmesh
+from mpi4py import MPI
+
+from vpcontact.errors import InputError
+from vpcontact.model import Elastic, Elasticity, Perzyna, PlaneStrain
+from vpcontact.solver import Dirichlet, QuasistaticProblem, tag_facets
+
+COMM = MPI.COMM_WORLD
+E, NU = 1000.0, 0.3
+FORMULATIONS = [("displacement", 1), ("displacement", 2), ("mixed", 2)]
+
+
+def _cube(dim: int):
+    if dim == 3:
+        msh = dmesh.create_box(COMM, [np.zeros(3), np.ones(3)], [2, 2, 2])
+    else:
+        msh = dmesh.create_unit_square(COMM, 3, 3)
+    markers = {}
+    for axis in range(dim):
+        markers[1 + axis] = lambda x, a=axis: np.isclose(x[a], 0.0)
+        markers[1 + dim + axis] = lambda x, a=axis: np.isclose(x[a], 1.0)
+    return msh, tag_facets(msh, markers)
+
+
+def _strain(values):
+    return lambda x, t: values(t) * np.ones(x.shape[1])
+
+
+def _pushed(dim, axes, strain):
+    """Rollers on the faces x_i = 0, and u_i = strain(t) on x_i = 1 for i in ``axes``."""
+    parts = [Dirichlet.symmetry(1 + i, dim, i, f"roller{i}") for i in range(dim)]
+    for i in axes:
+        value = tuple(_strain(strain) if j == i else None for j in range(dim))
+        parts.append(Dirichlet(1 + dim + i, value, f"pushed{i}"))
+    return parts
+
+
+def stress_at_points(problem) -> np.ndarray:
+    """σ_h at the quadrature points (Mandel): the kernels' σ_q plus the formulation's part."""
+    st = problem.state
+    sigma = st.view(st.stress).copy()
+    correction = problem.stress_correction_at_points()
+    if correction is not None:
+        sigma[:, :problem.mesh.topology.dim] += correction[:, None]
+    return sigma
+
+
+def _lateral_strain(problem, axis: int) -> float:
+    """u_axis at x_axis = 1 (the strain of a homogeneous state), from any node there."""
+    dim = problem.mesh.topology.dim
+    x = problem.V.tabulate_dof_coordinates()
+    owned = problem.V.dofmap.index_map.size_local
+    at = np.flatnonzero(np.isclose(x[:owned, axis], 1.0))
+    local = problem.u.x.array.reshape(-1, dim)[at, axis]
+    values = np.concatenate(COMM.allgather(local))
+    assert np.ptp(values) <= 1e-8 * max(np.abs(values).max(), 1e-300)
+    return float(values[0])
+
+
+@pytest.mark.parametrize("formulation,degree", FORMULATIONS)
+@pytest.mark.parametrize("dim", [2, 3])
+def test_uniaxial_relaxation_is_homogeneous_in_every_formulation(dim, formulation, degree):
+    """Ramp ε_xx to 2e-3 (ten times the yield strain) in 0.5 s, hold to 1 s; Perzyna flows
+    (k E/μ* = 20: much stiffer contrasts need the run loop's step cuts at the kink of the
+    load, in either formulation)."""
+    msh, tags = _cube(dim)
+    elasticity = Elasticity("3d_standard", E, NU)
+    law = Perzyna(elasticity, sigma_y=0.2, mu_star=5.0)
+    law = PlaneStrain(law) if dim == 2 else law
+    ramp = lambda t: 2e-3 * min(t / 0.5, 1.0)  # noqa: E731
+    problem = QuasistaticProblem(msh, tags, law, dirichlet=_pushed(dim, [0], ramp),
+                                 formulation=formulation, degree=degree)
+    # reference: the kernel at one point, driven by the strain the body took at each step
+    size = 6
+    s_ref, e_ref = np.zeros((1, size)), np.zeros((1, size))
+    reference = law.law if dim == 2 else law
+    for _ in range(10):
+        problem.step(0.1)
+        t = float(problem.time.value)
+        e_new = np.zeros((1, size))
+        e_new[0, 0] = ramp(t)
+        e_new[0, 1] = _lateral_strain(problem, 1)
+        if dim == 3:
+            e_new[0, 2] = _lateral_strain(problem, 2)
+        s_new = np.zeros((1, size))
+        reference.update(s_ref, e_ref, e_new, 0.1, s_new, None)
+        s_ref, e_ref = s_new, e_new
+        sigma = stress_at_points(problem)
+        scale = abs(s_ref[0, 0])
+        assert np.abs(sigma - sigma[0]).max() <= 1e-8 * scale, "the stress must be uniform"
+        in_plane = [0, 1] + ([2] if dim == 3 else [])
+        assert np.abs(sigma[0, 1:]).max() <= 1e-8 * scale, sigma[0]
+        assert abs(sigma[0, 0] - s_ref[0, 0]) <= 1e-8 * scale, (sigma[0, 0], s_ref[0, 0])
+        assert np.abs(s_ref[0, in_plane[1:]]).max() <= 1e-8 * scale, s_ref
+    assert s_ref[0, 0] < 0.5 * E * 2e-3, "the cube must have flowed and relaxed"
+    if problem.p is not None:  # the mean stress (σ33 included in plane strain)
+        s33 = law.out_of_plane_stress()[0] + problem.stress_correction_at_points()[0] \
+            if dim == 2 else sigma[0, 2]
+        mean = (sigma[0, 0] + sigma[0, 1] + s33) / 3
+        assert np.abs(problem.p.x.array - mean).max() <= 1e-8 * scale, "p is the mean stress"
+
+
+@pytest.mark.parametrize("formulation,degree", FORMULATIONS)
+def test_hydrostatic_compression_is_exact_in_every_formulation(formulation, degree):
+    msh, tags = _cube(3)
+    law = Perzyna(Elasticity("3d_standard", E, NU), sigma_y=0.2, mu_star=5.0)
+    problem = QuasistaticProblem(msh, tags, law, formulation=formulation, degree=degree,
+                                 dirichlet=_pushed(3, [0, 1, 2], lambda t: -1e-3 * t))
+    for _ in range(4):
+        problem.step(0.25)
+    K = Elasticity("3d_standard", E, NU).bulk_modulus
+    mean = -3.0 * K * 1e-3
+    sigma = stress_at_points(problem)
+    expected = np.array([mean, mean, mean, 0.0, 0.0, 0.0])
+    assert np.abs(sigma - expected).max() <= 1e-10 * abs(mean), sigma[0]
+    if problem.p is not None:
+        assert np.abs(problem.p.x.array - mean).max() <= 1e-10 * abs(mean)
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_incompressible_elasticity_keeps_the_volume(dim):
+    msh, tags = _cube(dim)
+    law = Elastic(Elasticity("3d_standard", E, 0.5))
+    law = PlaneStrain(law) if dim == 2 else law
+    problem = QuasistaticProblem(msh, tags, law, dirichlet=_pushed(dim, [0], lambda t: 1e-3 * t))
+    assert problem.formulation == "mixed"
+    problem.step(1.0)
+    sigma = stress_at_points(problem)
+    if dim == 3:  # uniaxial stress: lateral strain −ε/2, σ_xx = E ε (E = 3G)
+        assert _lateral_strain(problem, 1) == pytest.approx(-0.5e-3, rel=1e-10)
+        assert _lateral_strain(problem, 2) == pytest.approx(-0.5e-3, rel=1e-10)
+        assert np.abs(sigma[:, 0] - E * 1e-3).max() <= 1e-10 * E * 1e-3
+        assert np.abs(sigma[:, 1:]).max() <= 1e-10 * E * 1e-3
+    else:  # plane strain, σ_yy = 0: ε_yy = −ε; σ_xx = 4G ε, σ_zz = 2G ε
+        G = E / 3.0
+        assert _lateral_strain(problem, 1) == pytest.approx(-1e-3, rel=1e-10)
+        assert np.abs(sigma[:, 0] - 4 * G * 1e-3).max() <= 1e-10 * E * 1e-3
+        assert np.abs(sigma[:, 1:]).max() <= 1e-10 * E * 1e-3
+
+
+def test_incompressible_elasticity_needs_the_mixed_formulation():
+    msh, tags = _cube(3)
+    law = Elastic(Elasticity("3d_standard", E, 0.5))
+    with pytest.raises(InputError, match="nu = 0.5.*needs the mixed formulation"):
+        QuasistaticProblem(msh, tags, law, dirichlet=_pushed(3, [0], lambda t: t),
+                           formulation="displacement")
+    with pytest.raises(InputError, match="3-D or plane-strain model"):
+        Elasticity("plane_stress", E, 0.5)
+
+
+@pytest.mark.parametrize("law,degree,expected", [
+    (Perzyna(Elasticity("3d_standard", E, NU), 1.0, 1.0), None, "mixed"),
+    (Perzyna(Elasticity("3d_standard", E, NU), 1.0, 1.0), 2, "mixed"),
+    (Perzyna(Elasticity("3d_standard", E, NU), 1.0, 1.0), 1, "displacement"),
+    (Elastic(Elasticity("3d_standard", E, NU)), None, "displacement"),
+    (Elastic(Elasticity("3d_standard", E, 0.49)), None, "mixed"),
+])
+def test_default_formulation_is_mixed_where_displacements_lock(law, degree, expected):
+    msh, tags = _cube(3)
+    problem = QuasistaticProblem(msh, tags, law, degree=degree,
+                                 dirichlet=_pushed(3, [0], lambda t: t))
+    assert problem.formulation == expected
+    assert (problem.p is not None) == (expected == "mixed")
+
+
+def test_mixed_refuses_laws_that_change_the_volume():
+    from vpcontact.model import LinearRate
+    msh, tags = _cube(3)
+    law = LinearRate(Elasticity("3d_standard", E, NU), a=-1.0, b=0.0)
+    with pytest.raises(InputError, match="keeps the volume"):
+        QuasistaticProblem(msh, tags, law, dirichlet=_pushed(3, [0], lambda t: t),
+                           formulation="mixed")
+    with pytest.raises(InputError, match="Taylor–Hood"):
+        QuasistaticProblem(msh, tags, Elastic(Elasticity("3d_standard", E, NU)), degree=1,
+                           dirichlet=_pushed(3, [0], lambda t: t), formulation="mixed")
