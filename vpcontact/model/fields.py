@@ -255,6 +255,7 @@ class DisplacementPressure:
         return sigma_q + self.correction() * self.identity()
 
     def tangent(self, tangent_q, du):
+        self._tangent_q = tangent_q  # for the Schur preconditioner's weight
         e = self.identity()
         return ufl.dot(tangent_q, mandel_strain(du, self.dim)) - self._Kq * self._trace(du) * e
 
@@ -350,3 +351,31 @@ class DisplacementPressure:
 
     def stress_correction(self):
         return self.correction()
+
+    # -- the Schur complement's preconditioner ---------------------------------------------
+    def _shear_stiffness(self):
+        """2G_eff of the kernels' tangent C (UFL): its trace on the complement of the identity
+        1, per dimension there — 2G for isotropic elasticity, ~μ*/k where a Perzyna point
+        flows."""
+        C, e = self._tangent_q, self.identity()
+        size = len(e)
+        trace = sum(C[i, i] for i in range(size))
+        return (trace - ufl.dot(e, ufl.dot(C, e)) / ufl.dot(e, e)) / (size - 1)
+
+    def schur_preconditioner_form(self, scale: float):
+        """S_p = −β² s ∫ (1/(2G_eff) + 1/K) dp q dx: the pressure mass matrix weighted like the
+        Schur complement −β² s (B A⁻¹ Bᵀ + M/K) of the Jacobian in SNES's units (the analogue of
+        the inverse-viscosity mass matrix of variable-viscosity Stokes)."""
+        q, dp = ufl.TestFunction(self.Q), ufl.TrialFunction(self.Q)
+        weight = 1.0 / self._shear_stiffness() + self._inv_bulk
+        return fem.form(-(self.beta ** 2 * scale) * weight * dp * q * self._dx)
+
+    def split(self, vectors: list) -> list:
+        """The u part (owned entries) of vectors in the layout, as u-sized vectors."""
+        comm = self.u.function_space.mesh.comm
+        parts = []
+        for vec in vectors:
+            part = PETSc.Vec().createMPI((self._owned[0], None), comm=comm)
+            part.array[:] = vec.getArray(readonly=True)[:self._owned[0]]
+            parts.append(part)
+        return parts

@@ -75,6 +75,9 @@ class QuasistaticProblem:
             mixed where P_k displacements lock (:func:`~vpcontact.model.fields.locks`: 3-D or
             plane strain with Perzyna's isochoric flow, or ν ≥ 0.45) unless ``degree`` is 1,
             else displacement.
+        linear: the linear solver, "direct" (MUMPS), "iterative" (multigrid; a block
+            preconditioner for the mixed formulation) or "auto" (by size; see
+            :mod:`vpcontact.solver.linear`).
         petsc_options: options for the SNES of each step.
         options_prefix: PETSc options prefix of that SNES.
         predictor: initial guess of each step's Newton iteration. "linear" extrapolates the last
@@ -97,7 +100,8 @@ class QuasistaticProblem:
                  petsc_options: Optional[dict] = None, options_prefix: Optional[str] = None,
                  predictor: str = "linear", unstable_steps: str = "error",
                  time_scheme: str = "euler", dirichlet: Sequence[Dirichlet] = (),
-                 rotate_contact: Optional[bool] = None, formulation: Optional[str] = None):
+                 rotate_contact: Optional[bool] = None, formulation: Optional[str] = None,
+                 linear: str = "auto"):
         if predictor not in ("linear", "none"):
             raise InputError(f"predictor must be 'linear' or 'none', got {predictor!r}")
         if unstable_steps not in ("error", "warn"):
@@ -203,7 +207,8 @@ class QuasistaticProblem:
                                  options, options_prefix, scale=scale,
                                  load=sum(external[1:], external[0]) if external else None,
                                  point_forces=self._point_forces if self._point_loads else None,
-                                 constant_jacobian=constant_jacobian, rotation=rotation)
+                                 constant_jacobian=constant_jacobian, rotation=rotation,
+                                 linear=linear)
         if isinstance(contact, Signorini):
             self.solver.set_bounds(*variable_bounds(self.u, self.contact_dofs))
             self.contact_monitor = ContactMonitor(self.u, self.contact_dofs, self.equilibrium,

@@ -21,6 +21,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.errors import ConvergenceError
+from vpcontact.solver import linear as linear_solvers
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
                                           rejected_option)
 from vpcontact.solver.vi_linear import LaggedDirectSolve, LaggedMultigrid, rigid_body_modes
@@ -55,13 +56,16 @@ class StepSolver:
             u = R ũ: SNES then solves Rᵀ F(R ũ) = 0 with Jacobian Rᵀ J R (:meth:`Mat.PtAP`),
             bounds apply to ũ (local frames at contact nodes, :mod:`vpcontact.model.frames`).
             Dirichlet rows must be left alone by R. None: SNES works on u itself.
+        linear: "direct", "iterative" or "auto" (by size), see :mod:`vpcontact.solver.linear`;
+            user options (``ksp_*``, ``pc_*``, ``lagged_*``) override its choices.
     """
 
     def __init__(self, fields, bcs: Sequence[fem.DirichletBCMetaClass],
                  refresh: Callable[[], None], petsc_options: Optional[dict] = None,
                  options_prefix: Optional[str] = None, scale: float = 1.0, load=None,
                  point_forces: Optional[Callable[[], tuple]] = None,
-                 constant_jacobian: bool = False, rotation: Optional[PETSc.Mat] = None):
+                 constant_jacobian: bool = False, rotation: Optional[PETSc.Mat] = None,
+                 linear: str = "direct"):
         if not scale > 0:
             raise ValueError(f"scale must be > 0, got {scale}")
         self.scale = float(scale)
@@ -97,7 +101,22 @@ class StepSolver:
 
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(self.prefix)
-        self._options = {**DEFAULT_OPTIONS, **(petsc_options or {})}
+        self.linear = linear_solvers.choose(linear, self._x.getSize())
+        mixed = len(fields.functions) > 1
+        self._modes = None  # rigid-body modes (in the SNES layout), for multigrid
+        self._block = None  # the fieldsplit set-up of the mixed formulation
+        defaults = dict(DEFAULT_OPTIONS)
+        if self.linear == "iterative":
+            defaults.update(linear_solvers.iterative_options(mixed))
+            defaults.update({"lagged_" + k: v
+                             for k, v in linear_solvers.lagged_options(mixed).items()})
+            defaults["vpcontact_vi_linear"] = "lagged_gamg"
+            self._modes = rigid_body_modes(u.function_space, rotation, layout=fields)
+            if mixed:
+                self._block = linear_solvers.BlockPreconditioner(fields, self._modes, self.scale)
+            else:
+                self._A.setNearNullSpace(self._modes)
+        self._options = {**defaults, **(petsc_options or {})}
         try:
             self._read_options()
             self._setup(self.snes)
@@ -123,6 +142,11 @@ class StepSolver:
                         "snes": 0.0}
         PETSc.Log.begin()  # PETSc's event log, for the time spent in KSPSolve
         self._ksp_event = PETSc.Log.Event("KSPSolve")
+
+    @property
+    def unknowns(self) -> int:
+        """Global size of SNES's unknown (every field)."""
+        return self._x.getSize()
 
     def _read_options(self) -> None:
         """Put the options into PETSc's database under this solver's prefix and read
@@ -151,6 +175,8 @@ class StepSolver:
         snes.setJacobian(self._jacobian, self._A)
         snes.setFromOptions()
         snes.getKSP().setFromOptions()
+        if self._block is not None:
+            self._block.configure(snes.getKSP().getPC())
         snes.setConvergenceTest(self._converged)
 
     def set_bounds(self, lower: PETSc.Vec, upper: PETSc.Vec) -> None:
@@ -237,10 +263,13 @@ class StepSolver:
             self.lagged_lu = LaggedDirectSolve(self.snes, self._A, self.prefix + "lagged_", inner)
             self.lagged_lu.lag_allowed = self._lag_allowed
         else:
-            self.lagged_lu = LaggedMultigrid(self.snes, self._A, self.prefix + "lagged_",
-                                             rigid_body_modes(self.u.function_space, self._R,
-                                                              layout=self.fields),
+            modes = self._modes or rigid_body_modes(self.u.function_space, self._R,
+                                                    layout=self.fields)
+            self.lagged_lu = LaggedMultigrid(self.snes, self._A, self.prefix + "lagged_", modes,
                                              inner)
+            if self._block is not None:  # a saddle point: GMRES, and the fields on M
+                self.lagged_lu.allow_cg = False
+                self.lagged_lu.configure = self._block.configure
         ksp = self.snes.getKSP()
         ksp.setType("python")
         ksp.setPythonContext(self.lagged_lu)
@@ -343,6 +372,8 @@ class StepSolver:
             A.scale(self.scale)  # d(residual)/dx = d(residual)/du * scale
         if self._R is not None:
             A.PtAP(self._R, result=A_snes)
+        if self._block is not None:
+            self._block.update()
         self._jacobian_dt = self.dt
         self.jacobian_assemblies += 1
         restored, self._restored_jacobian_dt = self._restored_jacobian_dt, None
@@ -419,6 +450,6 @@ class StepSolver:
     def destroy(self) -> None:
         """Free the PETSc objects."""
         for obj in (self.snes, self._free_snes, self._A, self._b, self._x, self._loaded,
-                    self._load_vec, self._A_phys, self._b_phys, self._columns):
+                    self._load_vec, self._A_phys, self._b_phys, self._columns, self._block):
             if obj is not None:
                 obj.destroy()

@@ -338,6 +338,9 @@ class LaggedMultigrid(_ReducedSolve):
         self.allow_cg = True  # False once CG failed (then GMRES for good)
         self.setups = 0  # multigrid hierarchies built
         self.krylov_iterations = 0
+        #: called with the inner PC once M is its operator, before its set-up (the mixed
+        #: formulation's field split: index sets and the Schur preconditioner)
+        self.configure: Optional[Callable[[PETSc.PC], None]] = None
 
     def counters(self) -> dict:
         """Hierarchies built, cycles applied, GMRES iterations."""
@@ -388,6 +391,9 @@ class LaggedMultigrid(_ReducedSolve):
         self.use_krylov("cg" if self.allow_cg and self._matrix_is_symmetric() else "gmres")
         self.inner.setOperators(self.matrix)
         with options_in_database(self.prefix, self.options):
+            if self.configure is not None:
+                self.inner.setFromOptions()
+                self.configure(self.inner.getPC())
             self.inner.setUp()
         self.setups += 1
         self._ready = True

@@ -138,7 +138,10 @@ def variant_scene(scene, grid: Grid, run: Run):
     time = dataclasses.replace(scene.time, T=float(grid.times[-1]), k=run.k,
                                scheme=run.method.time_scheme)
     law = dataclasses.replace(scene.law, scheme=run.method.law_scheme)
-    return dataclasses.replace(scene, mesh=mesh, time=time, law=law, degree=run.method.degree)
+    # P1 is the displacement formulation (the mixed one is Taylor–Hood, P2)
+    formulation = "displacement" if run.method.degree == 1 else scene.formulation
+    return dataclasses.replace(scene, mesh=mesh, time=time, law=law, degree=run.method.degree,
+                               formulation=formulation)
 
 
 def new_run(grid: Grid, method: Method, level_h: int, level_k: int) -> Run:

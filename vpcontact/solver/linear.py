@@ -1,0 +1,125 @@
+# SPDX-License-Identifier: MIT
+"""The linear solver of a step: a direct factorization, or Krylov with a preconditioner that
+scales, chosen by the size of the problem.
+
+``direct``: MUMPS (LU, or LDLᵀ inside the VI solver when the matrix is symmetric); robust for
+every tangent, but its cost grows like unknowns^1.4–1.5 in 3-D and its memory faster.
+
+``iterative``: for the displacement formulation, GMRES with algebraic multigrid (GAMG, the
+rigid-body modes as near null space). For the mixed formulation, FGMRES with a block
+preconditioner (PCFIELDSPLIT, Schur complement factorization): GAMG on the displacement
+block and, for the Schur complement, the pressure mass matrix weighted by 1/(2G_eff) + 1/K
+from the current tangent (:meth:`~vpcontact.model.fields.DisplacementPressure.
+schur_preconditioner_form`). The displacement block no longer carries the bulk modulus, so
+multigrid works on it even where the body flows (where P1 or P2 displacements alone make every
+algebraic multigrid fail: the tangent is nearly incompressible). Inside SNES VI the same
+preconditioner acts on the full-size matrix M of :class:`~vpcontact.solver.vi_linear.
+LaggedMultigrid` (active rows and columns replaced by the identity).
+
+``auto``: iterative from :data:`ITERATIVE_FROM` unknowns on, direct below (measured on this
+machine, see the README's "Linear solvers").
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+from petsc4py import PETSc
+
+#: Choices of ``[solver] linear``.
+LINEAR_SOLVERS = ("auto", "direct", "iterative")
+
+#: Unknowns from which ``auto`` picks the iterative solver.
+ITERATIVE_FROM = 100_000
+
+#: KSP/PC options of the iterative solver of the mixed formulation (under the step's prefix;
+#: user options override them).
+MIXED_OPTIONS = {
+    "ksp_type": "fgmres",
+    "ksp_rtol": 1e-8,
+    "ksp_max_it": 500,
+    "ksp_gmres_restart": 100,
+    "pc_type": "fieldsplit",
+    "pc_fieldsplit_type": "schur",
+    "pc_fieldsplit_schur_fact_type": "full",
+    "fieldsplit_u_ksp_type": "preonly",
+    "fieldsplit_u_pc_type": "gamg",
+    "fieldsplit_u_pc_gamg_reuse_interpolation": "false",
+    "fieldsplit_p_ksp_type": "preonly",
+    "fieldsplit_p_pc_type": "jacobi",
+}
+
+#: The same for the displacement formulation.
+DISPLACEMENT_OPTIONS = {
+    "ksp_type": "gmres",
+    "ksp_rtol": 1e-8,
+    "ksp_max_it": 1000,
+    "ksp_gmres_restart": 100,
+    "pc_type": "gamg",
+    "pc_gamg_reuse_interpolation": "false",
+}
+
+
+def choose(linear: str, unknowns: int) -> str:
+    """``direct`` or ``iterative`` for ``[solver] linear`` and the problem's size."""
+    if linear not in LINEAR_SOLVERS:
+        raise ValueError(f"linear solver must be one of {LINEAR_SOLVERS}, got {linear!r}")
+    if linear == "auto":
+        return "iterative" if unknowns >= ITERATIVE_FROM else "direct"
+    return linear
+
+
+def iterative_options(mixed: bool) -> dict:
+    """KSP/PC options of the iterative solver (without prefix)."""
+    return dict(MIXED_OPTIONS if mixed else DISPLACEMENT_OPTIONS)
+
+
+def lagged_options(mixed: bool) -> dict:
+    """Options of the VI's inner preconditioner on M (``lagged_`` + these): the same PC."""
+    options = iterative_options(mixed)
+    return {k: v for k, v in options.items() if not k.startswith("ksp_")}
+
+
+class BlockPreconditioner:
+    """Sets up PCFIELDSPLIT for a layout with a pressure field: the field index sets, the
+    rigid-body modes on the displacement block, and the weighted pressure mass matrix as the
+    Schur complement's preconditioner, reassembled with every Jacobian.
+
+    Args:
+        fields: the :class:`~vpcontact.model.fields.DisplacementPressure` layout.
+        near_nullspace: the rigid-body modes in the layout of the SNES vector (rotated if the
+            unknowns are); their u parts go to the displacement block.
+        scale: SNES's displacement scale (the Schur matrix is in SNES's units).
+    """
+
+    def __init__(self, fields, near_nullspace: Optional[PETSc.NullSpace], scale: float):
+        from dolfinx.fem import petsc as fem_petsc
+
+        self.fields = fields
+        indices = fields.field_indices()
+        self.is_u, self.is_p = indices["displacement"], indices["pressure"]
+        if near_nullspace is not None:
+            vectors = fields.split(near_nullspace.getVecs())
+            self._modes = PETSc.NullSpace().create(vectors=vectors, comm=self.is_u.getComm())
+            self.is_u.compose("nearnullspace", self._modes)
+        self._configured: set = set()
+        self._form = fields.schur_preconditioner_form(scale)
+        self.matrix = fem_petsc.create_matrix(self._form)
+        self._assemble_matrix = fem_petsc.assemble_matrix
+
+    def update(self) -> None:
+        """Reassemble the Schur preconditioner from the current tangent."""
+        self.matrix.zeroEntries()
+        self._assemble_matrix(self.matrix, self._form)
+        self.matrix.assemble()
+
+    def configure(self, pc: PETSc.PC) -> None:
+        """Give ``pc`` (type fieldsplit, from the options) its fields and Schur matrix."""
+        if pc.getType() != "fieldsplit" or pc.handle in self._configured:
+            return  # (the splits of a PC are given once; later set-ups keep them)
+        self._configured.add(pc.handle)
+        pc.setFieldSplitIS(("u", self.is_u), ("p", self.is_p))
+        pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, self.matrix)
+
+    def destroy(self) -> None:
+        self.matrix.destroy()
