@@ -30,7 +30,6 @@ before the limit is 1e−4 σ_Y; μ* = 1e−4 gives the same brackets, μ* = 1e�
 up by one step (0.25 %).
 """
 
-import inspect
 import math
 
 import numpy as np
@@ -43,11 +42,8 @@ from vpcontact.solver import Dirichlet, Loads, QuasistaticProblem, StepControl, 
 from vpcontact.studies import cylinder
 
 A, B = 1.0, 2.0
-MIXED_READY = "formulation" in inspect.signature(QuasistaticProblem).parameters
-PENDING = () if MIXED_READY else pytest.mark.xfail(
-    strict=False, reason="mixed formulation not yet in QuasistaticProblem")
 DISPLACEMENT = pytest.param("displacement", id="displacement")
-MIXED = pytest.param("mixed", id="mixed", marks=PENDING)
+MIXED = pytest.param("mixed", id="mixed")
 
 
 def tube_problem(mesh, tags, law, pressure, formulation: str, degree: int):
@@ -56,13 +52,12 @@ def tube_problem(mesh, tags, law, pressure, formulation: str, degree: int):
     parts = [Dirichlet.symmetry(cylinder.SYMMETRY_X, 2, 0, "x = 0"),
              Dirichlet.symmetry(cylinder.SYMMETRY_Y, 2, 1, "y = 0")]
     loads = Loads(tractions={cylinder.INNER: cylinder.pressure_traction(pressure)})
-    # explicit: where it exists, formulation=None picks "mixed" for Perzyna in plane strain
-    extra = {"formulation": formulation} if MIXED_READY else {}
+    # explicit: the default picks "mixed" for Perzyna in plane strain
     problem = QuasistaticProblem(mesh, tags, law, dirichlet=parts, loads=loads,
-                                 degree=2 if formulation == "mixed" else degree, **extra)
+                                 degree=2 if formulation == "mixed" else degree,
+                                 formulation=formulation)
     if formulation == "mixed":
-        fields = getattr(getattr(problem, "fields", None), "functions", ())
-        assert hasattr(problem, "p") or len(fields) == 2, "the mixed problem has no pressure"
+        assert len(problem.fields.functions) == 2, "the mixed problem has no pressure"
     return problem
 
 
@@ -155,8 +150,8 @@ def test_mesh_tags_and_radial_sampling(shared_tmp_path):
 
 @pytest.mark.parametrize("formulation, nu", [
     pytest.param("displacement", 0.3, id="displacement-nu0.3"),
-    pytest.param("mixed", 0.5, id="mixed-nu0.5", marks=PENDING),
-    pytest.param("mixed", 0.4999, id="mixed-nu0.4999", marks=PENDING)])
+    pytest.param("mixed", 0.5, id="mixed-nu0.5"),
+    pytest.param("mixed", 0.4999, id="mixed-nu0.4999")])
 def test_elastic_tube_follows_lame_with_p2(shared_tmp_path, formulation, nu):
     curved = [lame_errors(*elastic_solve(shared_tmp_path, h, 2, nu, formulation, 2))
               for h in SIZES]
@@ -231,7 +226,7 @@ def hill_curve(tmp, h, formulation, degree, model="3d_standard"):
     # (0.9975, 1.0] at h = 0.2, (0.995, 0.9975] at h = 0.1
     pytest.param("displacement", 2, "3d_standard", (0.2, 0.1), (0.99, 1.005), id="P2"),
     pytest.param("displacement", 2, "3d", (0.2,), (0.99, 1.005), id="P2-paper-set"),
-    pytest.param("mixed", 2, "3d_standard", (0.2, 0.1), (0.97, 1.03), id="mixed", marks=PENDING)])
+    pytest.param("mixed", 2, "3d_standard", (0.2, 0.1), (0.97, 1.03), id="mixed")])
 def test_perzyna_tube_reaches_hills_limit(shared_tmp_path, formulation, degree, model, sizes,
                                           band):
     limits = []

@@ -256,7 +256,7 @@ def test_defaults_linear_law_and_obstacle():
 
 def test_text_scene_name_and_round_trip_of_special_values(tmp_path):
     text = edit(BASE, 'name = "base"', 'description = "quote \\" backslash \\\\ tab\\t é"')
-    text += ('\n[solver]\npetsc_options = { snes_rtol = 1e-10, ksp_type = "preonly", '
+    text += ('\n[solver]\nlinear = "iterative"\npetsc_options = { snes_rtol = 1e-10, ksp_type = "preonly", '
              'snes_monitor = "", snes_max_it = 50, snes_converged_reason = true }\n'
              '[boundary.edge]\nkind = "traction"\nbox = { lower = [0, 0], upper = [1e-9, 1] }\n'
              'traction = ["x[1]*t", -1.5e-3]\n'
@@ -265,6 +265,7 @@ def test_text_scene_name_and_round_trip_of_special_values(tmp_path):
     assert scene.name == "scene"
     assert scene.description == 'quote " backslash \\ tab\t é'
     assert scene.solver.petsc_options["snes_max_it"] == 50
+    assert scene.solver.linear == "iterative"
     assert loads_text(scene.to_toml()) == scene
 
 
@@ -517,6 +518,7 @@ def test_file_read_errors(tmp_path):
      r"contact\.obstacle: must be a value, not a condition"),
     (edit(BASE, "[mesh]", "[discretization]\ndegree = 3\n[mesh]"), r"discretization\.degree: must be one of 1, 2; got 3"),
     (edit(BASE, "[mesh]", "[solver]\npredictor = \"quadratic\"\n[mesh]"), r"solver\.predictor: must be one of"),
+    (edit(BASE, "[mesh]", "[solver]\nlinear = \"cg\"\n[mesh]"), r"solver\.linear: must be one of"),
     ("", r"mesh: missing required table \[mesh\]"),
 ])
 def test_other_invalid_scenes(text, match):

@@ -76,6 +76,7 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
                                      formulation=scene.formulation,
                                      petsc_options=dict(scene.solver.petsc_options),
                                      predictor=scene.solver.predictor,
+                                     linear=scene.solver.linear,
                                      time_scheme=scene.time.scheme)
     except SolverOptionError as err:
         known = err.option is not None and err.option in scene.solver.petsc_options

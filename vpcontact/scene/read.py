@@ -18,6 +18,7 @@ from vpcontact.scene.locate import join
 from vpcontact.scene.physics import read_contact, read_law
 from vpcontact.scene.schema import (REQUIRED, Report, Table, at_least, between, fmt, greater, type_name,
                                     unknown_key)
+from vpcontact.linear_solvers import LINEAR_SOLVERS
 from vpcontact.model.locking import FORMULATIONS, locking_expected
 from vpcontact.scene.specs import (BUILTIN_MESHES, CELL_TYPES, DIAGONALS, BoundaryPart,
                                    BoxSelector, ContactSpec, InitialSpec, LoadSpec, MaterialSpec,
@@ -364,9 +365,10 @@ def read_time(top: Table) -> TimeSpec:
 
 
 def read_solver(top: Table) -> SolverSpec:
-    """``[solver]``: predictor and PETSc options (keys without the leading "-")."""
-    t = top.section("solver", ("predictor", "petsc_options"))
+    """``[solver]``: predictor, linear solver and PETSc options (keys without the leading "-")."""
+    t = top.section("solver", ("predictor", "linear", "petsc_options"))
     predictor = t.choice("predictor", ("linear", "none"), "linear")
+    linear = t.choice("linear", LINEAR_SOLVERS, "auto")
     raw = t.data.get("petsc_options", {})
     if not isinstance(raw, dict):
         t.add("petsc_options", f"expected a table, got {type_name(raw)}")
@@ -379,7 +381,7 @@ def read_solver(top: Table) -> SolverSpec:
             t.report.add(path, message)
         else:
             options[key] = value
-    return SolverSpec(predictor, options)
+    return SolverSpec(predictor, options, linear)
 
 
 def _petsc_option_problem(key: str, value: Any) -> str | None:

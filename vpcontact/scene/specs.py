@@ -248,10 +248,13 @@ class TimeSpec:
 
 @dataclass(frozen=True)
 class SolverSpec:
-    """``[solver]``: Newton predictor and extra PETSc options (without the leading "-")."""
+    """``[solver]``: Newton predictor, extra PETSc options (without the leading "-") and the
+    linear solver (``"auto"``, ``"direct"`` or ``"iterative"``, see
+    :mod:`vpcontact.solver.linear`)."""
 
     predictor: str = "linear"
     petsc_options: dict[str, str | int | float | bool] = field(default_factory=dict)
+    linear: str = "auto"
 
 
 @dataclass(frozen=True)

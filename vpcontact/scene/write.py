@@ -129,6 +129,7 @@ def dump(scene: Any) -> str:
                                      "scheme": time.scheme, "tolerance": time.tolerance})
     blocks += _table("discretization", {"formulation": scene.formulation, "degree": scene.degree})
     blocks += _table("solver", {"predictor": scene.solver.predictor,
+                                "linear": scene.solver.linear,
                                 "petsc_options": scene.solver.petsc_options})
     output = scene.output
     blocks += _table("output", {"xdmf": output.xdmf, "contact_csv": output.contact_csv,
