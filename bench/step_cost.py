@@ -49,7 +49,8 @@ LARGEST_FIT = 4  # sizes in the large-size fit
 
 
 def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
-           mu_star: Optional[float] = None) -> dict:
+           mu_star: Optional[float] = None, formulation: str = "displacement",
+           linear: str = "auto") -> dict:
     """Run one size in this process; the record of its timed window (``sigma_y``: the paper's
     √10 by default; ``inf`` makes the body elastic)."""
     from vpcontact.paper import signorini as paper
@@ -61,8 +62,11 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
 
     comm = MPI.COMM_WORLD
     data = {"petsc_options": options, "sigma_y": sigma_y, "mu_star": mu_star}
-    problem = (paper.signorini_2d(n, **data) if dim == 2
-               else paper.signorini_3d(3 * n, n, n, **data))
+    if dim == 2:
+        problem = paper.signorini_2d(n, **data)
+    else:
+        problem = paper.signorini_3d(3 * n, n, n, **data, formulation=formulation,
+                                     degree=2 if formulation == "mixed" else 1, linear=linear)
     t0, t1 = WINDOWS[dim]
     list(advance(problem, t0, StepControl(RUN_IN_STEP)))
     solver = problem.solver
@@ -80,9 +84,8 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
     counters = {k: (v - counters0[k]) / steps  # the lagged VI solver's, per step
                 for k, v in (lagged.counters() if lagged is not None else {}).items()
                 if not isinstance(v, str)}
-    V = problem.V
-    dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
-    return {"dim": dim, "n": n, "sigma_y": _json_float(sigma_y),
+    dofs = solver.unknowns
+    return {"dim": dim, "n": n, "formulation": formulation, "linear": solver.linear, "sigma_y": _json_float(sigma_y),
             "mu_star": mu_star, "dofs": dofs, "ranks": comm.size, "steps": steps,
             "seconds_per_step": wall / steps,
             "seconds_per_step_split": time_split(t),
@@ -163,6 +166,10 @@ def main(argv=None) -> int:
     parser.add_argument("--mu-star", type=float, default=None,
                         help="viscosity μ* (default: the paper's 200; larger: softer contrast)")
     parser.add_argument("--mpi-size", type=int, default=8, help="n of the speed-up run (3n×n×n)")
+    parser.add_argument("--formulation", choices=["displacement", "mixed"], default="displacement",
+                        help="3-D: the paper's P1 (default) or Taylor–Hood P2–P1")
+    parser.add_argument("--linear", choices=["auto", "direct", "iterative"], default="auto",
+                        help="linear solver (vpcontact.linear_solvers)")
     parser.add_argument("--single", nargs=2, type=int, metavar=("DIM", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "step_cost.json"))
     args = parser.parse_args(argv)
@@ -170,7 +177,7 @@ def main(argv=None) -> int:
         parser.error("-o takes KEY=VALUE")
     if args.single:
         record = single(*args.single, dict(o.split("=", 1) for o in args.options), args.sigma_y,
-                        args.mu_star)
+                        args.mu_star, args.formulation, args.linear)
         if MPI.COMM_WORLD.rank == 0:
             print("RECORD " + json.dumps(record), flush=True)
         return 0
@@ -183,6 +190,8 @@ def main(argv=None) -> int:
     for flag, value in (("--sigma-y", args.sigma_y), ("--mu-star", args.mu_star)):
         if value is not None:
             passed_on += [flag, repr(value)]
+    passed_on += ["--formulation", args.formulation, "--linear", args.linear]
+    result.update({"formulation": args.formulation, "linear": args.linear})
     for dim, sizes in ((2, args.sizes2d), (3, args.sizes3d)):
         records = [launch(dim, n, 1, passed_on) for n in sizes]
         result[f"{dim}d"] = {"records": records,

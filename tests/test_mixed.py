@@ -229,3 +229,14 @@ def test_block_preconditioner_inside_the_vi_matches_the_direct_solver():
     solves = iterative.solver.total_iterations
     per_solve = counters["krylov_iterations"] / max(solves, 1)
     assert 5 <= per_solve <= 80, (per_solve, counters)
+
+
+def test_auto_linear_solver_by_size_and_formulation():
+    from vpcontact.linear_solvers import ITERATIVE_FROM, choose
+    for formulation, threshold in ITERATIVE_FROM.items():
+        assert choose("auto", threshold - 1, formulation) == "direct"
+        assert choose("auto", threshold, formulation) == "iterative"
+        assert choose("direct", 10 * threshold, formulation) == "direct"
+        assert choose("iterative", 10, formulation) == "iterative"
+    with pytest.raises(ValueError, match="must be one of"):
+        choose("cg", 10)

@@ -64,13 +64,14 @@ def signorini_2d(n: int = 32, scheme: str = "implicit", degree: int = 1, comm=MP
 def signorini_3d(nx: int = 24, ny: int = 8, nz: int = 8, scheme: str = "implicit",
                  model: str = "3d", degree: int = 1, comm=MPI.COMM_WORLD, petsc_options=None,
                  sigma_y: float = SIGMA_Y, mu_star: float = MU_STAR,
-                 formulation: str = "displacement") -> QuasistaticProblem:
+                 formulation: str = "displacement", linear: str = "auto") -> QuasistaticProblem:
     """§4.1.2: Ω = (0,3)×(0,1)², clamped at x1 = 0, f_2 = (0,0,-10t) on x1 = 3, g = 0 on x3 = 0.
 
     ``sigma_y`` and ``mu_star`` default to the paper's; the benchmarks vary them (a larger μ*
     lowers the stiffness contrast k E/μ* of the plastic tangent). The default discretization is
     the paper's (P1 displacements), which locks once the beam flows; ``formulation="mixed"``
-    (with ``degree=2``) is the locking-free Taylor–Hood one."""
+    (with ``degree=2``) is the locking-free Taylor–Hood one; ``linear`` picks the linear solver
+    (:mod:`vpcontact.linear_solvers`)."""
     mesh = dmesh.create_box(comm, [np.zeros(3), np.array([3.0, 1.0, 1.0])], [nx, ny, nz],
                             dmesh.CellType.tetrahedron)
     tags = tag_facets(mesh, {
@@ -82,4 +83,5 @@ def signorini_3d(nx: int = 24, ny: int = 8, nz: int = 8, scheme: str = "implicit
     loads = Loads(tractions={TRACTION: lambda x, t: ufl.as_vector([0.0, 0.0, -10.0 * t])})
     return QuasistaticProblem(mesh, tags, law, clamped_tag=CLAMP, loads=loads,
                               contact=Signorini(CONTACT, gap=0.0), degree=degree,
-                              petsc_options=petsc_options, formulation=formulation)
+                              petsc_options=petsc_options, formulation=formulation,
+                              linear=linear)

@@ -16,8 +16,8 @@ algebraic multigrid fail: the tangent is nearly incompressible). Inside SNES VI 
 preconditioner acts on the full-size matrix M of :class:`~vpcontact.solver.vi_linear.
 LaggedMultigrid` (active rows and columns replaced by the identity).
 
-``auto``: iterative from :data:`ITERATIVE_FROM` unknowns on, direct below (measured on this
-machine, see the README's "Linear solvers").
+``auto``: iterative from :data:`ITERATIVE_FROM` unknowns on (by formulation), direct below
+(see :mod:`vpcontact.linear_solvers` and the README's "Linear solvers").
 """
 
 from __future__ import annotations
@@ -28,11 +28,18 @@ from petsc4py import PETSc
 
 from vpcontact.linear_solvers import ITERATIVE_FROM, LINEAR_SOLVERS, choose  # noqa: F401
 
+#: Relative tolerance of the block-preconditioned Krylov solves of the mixed formulation: an
+#: inexact Newton step. Measured on the paper's 3-D test while it flows (t = 0.3–0.4 s, k = 0.01,
+#: 1 038 unknowns): 1e-4 takes 49 Newton iterations for 10 steps (MUMPS: 48) with the same
+#: contact force to 1e-12, at 56 GMRES iterations per Newton iteration; 1e-9 stalls at about
+#: 1e-9 after 300 iterations and the steps are cut 8-fold; 1e-6 needs 115 per Newton iteration.
+ITERATIVE_RTOL = 1e-4
+
 #: KSP/PC options of the iterative solver of the mixed formulation (under the step's prefix;
 #: user options override them).
 MIXED_OPTIONS = {
     "ksp_type": "fgmres",
-    "ksp_rtol": 1e-8,
+    "ksp_rtol": ITERATIVE_RTOL,
     "ksp_max_it": 500,
     "ksp_gmres_restart": 200,
     "ksp_norm_type": "unpreconditioned",

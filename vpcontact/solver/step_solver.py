@@ -101,8 +101,9 @@ class StepSolver:
 
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(self.prefix)
-        self.linear = linear_solvers.choose(linear, self._x.getSize())
         mixed = len(fields.functions) > 1
+        self.linear = linear_solvers.choose(linear, self._x.getSize(),
+                                            "mixed" if mixed else "displacement")
         self._modes = None  # rigid-body modes (in the SNES layout), for multigrid
         self._block = None  # the fieldsplit set-up of the mixed formulation
         defaults = dict(DEFAULT_OPTIONS)
@@ -274,7 +275,11 @@ class StepSolver:
         ksp.setType("python")
         ksp.setPythonContext(self.lagged_lu)
         ksp.getPC().setType("none")  # the context solves; PETSc must not factorize J_II
-        ksp.setTolerances(rtol=1e-9, atol=0.0)
+        # Direct (lagged factors): GMRES to 1e-9 costs a few substitutions. The block
+        # preconditioner of the mixed formulation: an inexact Newton step (rtol
+        # ITERATIVE_RTOL) keeps Newton's iteration count (see vpcontact.solver.linear).
+        rtol = linear_solvers.ITERATIVE_RTOL if self._block is not None else 1e-9
+        ksp.setTolerances(rtol=rtol, atol=0.0)
 
     def _lag_allowed(self) -> bool:
         """When to try lagged factors (measured on the paper's 3-D test, k = 0.01-0.02): with a
