@@ -77,7 +77,7 @@ def _relaxation_figure(out: Path, session) -> None:
     forces = session.forces
     t = np.array(forces.times)
     force = -np.array(forces.contact)[:, 1]
-    rows = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)  # t,x,y,z,u_ν,gap,pressure
+    rows = np.genfromtxt(out / "contact.csv", delimiter=",", names=True)  # columns by name
     fig, (ax_a, ax_b) = plt.subplots(1, 2, figsize=(11, 4.2))
     ax_a.plot(t, force, "o-", ms=3)
     ax_a.axvline(RAMP, color="k", ls="--", lw=1, label="end of the ramp")
@@ -85,9 +85,10 @@ def _relaxation_figure(out: Path, session) -> None:
              title="(a) the force relaxes while the depth is held")
     ax_a.legend()
     for when in (t[np.argmin(np.abs(t - RAMP))], t[-1]):
-        at = np.isclose(rows[:, 0], when)
-        order = np.argsort(rows[at, 1])
-        ax_b.plot(rows[at, 1][order], -rows[at, 6][order], "o-", ms=3, label=f"t = {when:.3g}")
+        at = np.isclose(rows["t"], when)
+        order = np.argsort(rows["x"][at])
+        ax_b.plot(rows["x"][at][order], -rows["pressure"][at][order], "o-", ms=3,
+                  label=f"t = {when:.3g}")
     ax_b.set(xlabel="x1", ylabel="contact pressure −σ_ν", title="(b) pressure along the top")
     ax_b.legend()
     for ax in (ax_a, ax_b):

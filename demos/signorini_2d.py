@@ -31,7 +31,7 @@ is stable only for k below about 4e-6 s.
 * ``fig1_deformed.png``: deformed configuration at t = T coloured by the von Mises norm (Fig. 1).
 * ``fig2_contact_evolution.png``: u2 of the contact nodes along Γ3 at several times, with the
   obstacle, and over time at a few nodes (Fig. 2).
-* ``contact_history.csv``: t, x, y, z, u_normal, gap, pressure for every contact node and step.
+* ``contact_history.csv``: t, x, y, z, u_normal, gap, clearance, pressure for every contact node and step.
 
 With ``CI`` set, the run uses a coarser mesh and larger steps.
 

@@ -27,7 +27,7 @@ locking").
 * ``fig3_deformed.png``: deformed beam at t = T coloured by the von Mises norm (Fig. 3).
 * ``fig4_contact_evolution.png``: u3 (the component normal to Γ3) of the contact nodes on the
   line x2 = 0.5, along x1 at several times and over time (Fig. 4).
-* ``contact_history.csv``: t, x, y, z, u_normal, gap, pressure of every contact node and step.
+* ``contact_history.csv``: t, x, y, z, u_normal, gap, clearance, pressure of every contact node and step.
 
 With ``CI`` set, the run uses a coarser mesh and larger steps.
 

@@ -155,9 +155,11 @@ def test_1d_scene_reproduces_the_exact_solution(shared_tmp_path):
     err = MPI.COMM_WORLD.allreduce(err, op=MPI.MAX)
     assert err < 0.1 * 0.05, f"max nodal error {err:.3e} at r = 0.05 (paper: C r, C = 0.0956)"
     rows = (out / "contact.csv").read_text().splitlines()
-    assert rows[0] == "t,x,y,z,u_normal,gap,pressure" and len(rows) == 1 + 41  # t = 0 and 40 steps
+    assert rows[0] == "t,x,y,z,u_normal,gap,clearance,pressure" and len(rows) == 1 + 41  # t = 0 and 40 steps
     last = [float(v) for v in rows[-1].split(",")]
-    assert last[4] > last[5] and last[6] == pytest.approx(-(last[4] - last[5]) / 100.0)
+    # normal compliance: the node is past the foundation's surface (negative clearance)
+    assert last[4] > last[5] and last[7] == pytest.approx(-(last[4] - last[5]) / 100.0)
+    assert last[6] == pytest.approx(last[5] - last[4]) and last[6] < 0
 
 
 @pytest.mark.parametrize("name, cells, T, k", [
@@ -186,7 +188,12 @@ def test_bundled_scene_runs_and_writes_its_outputs(shared_tmp_path, name, cells,
     assert split["vi_and_other_snes"] > -1e-3, split  # a difference of two clocks
     assert sum(split.values()) <= summary["wall_time_s"] * 1.01 + 1e-3, split
     values = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
-    assert np.isfinite(values).all() and (values[:, 6] <= 1e-8).all()  # compressive only
+    assert np.isfinite(values).all() and (values[:, 7] <= 1e-8).all()  # compressive only
+    # the clearance is the gap less u_ν; a rigid obstacle is never penetrated (to round-off)
+    np.testing.assert_allclose(values[:, 6], values[:, 5] - values[:, 4], rtol=0,
+                               atol=1e-9 * np.abs(values[:, 4:6]).max())  # 11 digits written
+    if scenes.load(path).contact.type == "signorini":
+        assert (values[:, 6] >= -1e-9 * np.abs(values[:, 4:6]).max()).all()
 
 
 def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, capsys):

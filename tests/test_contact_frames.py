@@ -155,7 +155,7 @@ def test_rollers_and_prescribed_displacement_give_the_uniaxial_reaction():
     x = problem.V.tabulate_dof_coordinates()
     assert np.allclose(u[:, 1], -delta * x[:, 1], atol=1e-12)
     assert np.allclose(u[:, 0], 0.3 * delta * x[:, 0], atol=1e-12)  # Poisson's expansion
-    assert problem.driving_displacement() == pytest.approx(delta)
+    assert problem.driving_displacement() == pytest.approx(-delta)  # signed: pushed down
 
 
 @pytest.mark.parametrize("parts, free", [

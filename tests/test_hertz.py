@@ -96,7 +96,7 @@ def test_sphere_indenter_driven_by_displacement_follows_hertz(shared_tmp_path):
         a, _ = hertz.sphere_3d(4 * p.force, R, E_STAR)
         assert abs(p.half_width / a - 1) < 0.05, (step.time, p.half_width, a)
         forces.append(4 * p.force)
-        assert problem.driving_displacement() == pytest.approx(depth * step.time)
+        assert problem.driving_displacement() == pytest.approx(-depth * step.time)  # signed
     assert np.all(np.diff(forces) > 0)
     # The clamped block of depth 2R is stiffer than Hertz's half-space: more force, same depth.
     assert 1.0 < forces[-1] / hertz.sphere_force(depth, R, E_STAR) < 1.15

@@ -95,7 +95,7 @@ def test_rollers_and_prescribed_displacement_from_a_scene(shared_tmp_path):
     top = rows[:, header.index("top_y")]
     expected = -100.0 * 0.01 * rows[:, 0] * 2.0  # -E ε(t) W
     assert np.allclose(top, expected, rtol=1e-9, atol=1e-12)
-    assert np.allclose(rows[:, header.index("displacement")], 0.01 * rows[:, 0])
+    assert np.allclose(rows[:, header.index("displacement")], -0.01 * rows[:, 0])  # signed
     summary = json.loads((out / "summary.json").read_text())
     assert summary["reactions"]["parts"] == ["bottom", "left", "top"]
     assert summary["reactions"]["final"]["bottom"][1] == pytest.approx(2.0, rel=1e-9)
@@ -109,7 +109,7 @@ def test_moving_cylinder_indents_a_block_from_a_scene(shared_tmp_path):
     header, rows = _csv(out / "reactions.csv")
     force = -rows[:, header.index("contact_y")]
     depth = rows[:, header.index("displacement")]
-    assert np.allclose(depth, 0.02 * rows[:, 0])
+    assert np.allclose(depth, -0.02 * rows[:, 0])  # signed: the cylinder moves down
     assert force[0] == 0.0 and np.all(np.diff(force) > 0), force
     # reactions balance the contact force (no other load)
     assert np.allclose(rows[:, header.index("bottom_y")], force, rtol=1e-8, atol=1e-10)
@@ -336,8 +336,11 @@ def test_curved_face_on_a_foundation_surface_from_a_scene(shared_tmp_path):
         if kind == "normal_compliance":
             expected = -np.maximum(last[:, 4] - last[:, 5], 0.0) / 1e-4
             # (u_ν and g are written to 11 digits; their difference loses some of them)
-            assert np.allclose(last[:, 6], expected, atol=1e-6 * np.abs(expected).max())
-        assert (last[:, 6] < 0).sum() >= 5  # several nodes in contact
+            assert np.allclose(last[:, 7], expected, atol=1e-6 * np.abs(expected).max())
+            # the compliance law read off the clearance column: σ_ν = −(−clearance)_+/μ
+            assert np.allclose(last[:, 7], -np.maximum(-last[:, 6], 0.0) / 1e-4,
+                               atol=1e-6 * np.abs(expected).max())
+        assert (last[:, 7] < 0).sum() >= 5  # several nodes in contact
     assert forces["signorini"] > 1e-3
     assert abs(forces["normal_compliance"] / forces["signorini"] - 1) < 0.05, forces
 

@@ -204,16 +204,18 @@ class ContactHistory:
             self.gaps = list(arrays["gap"])
 
     def write_csv(self, path: str | Path) -> None:
-        """Long format: t, x, y, z, u_normal, gap, pressure, written by rank 0; the file is on
-        disk when any rank returns."""
+        """Long format: t, x, y, z, u_normal, gap, clearance, pressure, written by rank 0; the
+        file is on disk when any rank returns. ``gap`` is the obstacle's distance from the
+        node's reference position along its normal (it changes when the obstacle moves),
+        ``clearance`` = gap − u_normal the current one (0 where the node touches)."""
         def write():
             with open(path, "w") as f:
-                f.write("t,x,y,z,u_normal,gap,pressure\n")
+                f.write("t,x,y,z,u_normal,gap,clearance,pressure\n")
                 for t, un, gap, p in zip(self.times, self.normal_displacement, self.gaps,
                                          self.pressure):
                     for (x, y, z), u_i, g_i, p_i in zip(self.points, un, gap, p):
                         f.write(f"{t:.10g},{x:.10g},{y:.10g},{z:.10g},"
-                                f"{u_i:.10e},{g_i:.10e},{p_i:.10e}\n")
+                                f"{u_i:.10e},{g_i:.10e},{g_i - u_i:.10e},{p_i:.10e}\n")
         on_rank0(self.comm, write)
 
 

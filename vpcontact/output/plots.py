@@ -40,7 +40,7 @@ def deformed_configuration(path: str | Path, u, von_mises, title: str, scale: fl
     if dim == 2:
         from matplotlib.collections import PolyCollection
         fig, ax = plt.subplots(figsize=(6.4, 5.2))
-        coll = PolyCollection(polys, array=values, cmap="jet", edgecolors="k", linewidths=0.1)
+        coll = PolyCollection(polys, array=values, cmap="viridis", edgecolors="k", linewidths=0.1)
         ax.add_collection(coll)
         ax.autoscale()
         ax.set_aspect("equal")
@@ -49,7 +49,7 @@ def deformed_configuration(path: str | Path, u, von_mises, title: str, scale: fl
         from mpl_toolkits.mplot3d.art3d import Poly3DCollection
         fig = plt.figure(figsize=(8, 5))
         ax = fig.add_subplot(projection="3d")
-        coll = Poly3DCollection(polys, array=values, cmap="jet", edgecolors="k", linewidths=0.05)
+        coll = Poly3DCollection(polys, array=values, cmap="viridis", edgecolors="k", linewidths=0.05)
         ax.add_collection3d(coll)
         lo, hi = polys.reshape(-1, 3).min(axis=0), polys.reshape(-1, 3).max(axis=0)
         ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]),
@@ -94,6 +94,16 @@ def contact_evolution(path: str | Path, history: ContactHistory, axis: int, titl
         ax_a.plot(xs, normal_sign * history.gap[sel][order], "k--", lw=1.2, label="obstacle")
     ax_a.set(xlabel=f"x{axis + 1} [m]", ylabel="normal displacement component [m]",
              title="(a) along the contact boundary")
+    # the displacements set the scale: an obstacle far from a few nodes (rims of a curved
+    # face) is clipped rather than flattening every curve
+    lo, hi = float(u.min(initial=0.0)), float(u.max(initial=0.0))
+    span = max(hi - lo, abs(hi), abs(lo), 1e-300)
+    if obstacle:  # the obstacle where it is within reach of the scale (not at far rim nodes)
+        g = normal_sign * history.gap[sel]
+        near = g[(g >= lo - 2 * span) & (g <= hi + 2 * span)]
+        lo, hi = min(lo, float(near.min(initial=lo))), max(hi, float(near.max(initial=hi)))
+    margin = 0.05 * max(hi - lo, 1e-300)
+    ax_a.set_ylim(lo - margin, hi + margin)
     ax_a.legend(fontsize=7, ncol=2)
     for j in np.unique(np.linspace(0, len(xs) - 1, 6).round().astype(int)):
         ax_b.plot(times, u[:, j], label=f"x{axis + 1} = {xs[j]:.2f}")

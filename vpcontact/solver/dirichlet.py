@@ -130,8 +130,8 @@ class DirichletParts:
             component.update(t)
 
     def mean_moving_value(self) -> Optional[float]:
-        """Mean |u_D| over the dofs of the first time-dependent component (collective), or None
-        without one."""
+        """Mean u_D (signed) over the dofs of the first time-dependent component (collective),
+        or None without one."""
         moving = [c for c in self._components if c.moving]
         if not moving:
             return None
@@ -139,7 +139,7 @@ class DirichletParts:
         owned = c.space.dofmap.index_map.size_local
         values = c.function.x.array[c.dofs[1][c.dofs[1] < owned]]
         comm = self.V.mesh.comm
-        total = comm.allreduce(float(np.sum(np.abs(values))), op=MPI.SUM)
+        total = comm.allreduce(float(np.sum(values)), op=MPI.SUM)
         count = comm.allreduce(len(values), op=MPI.SUM)
         return total / max(count, 1)
 

@@ -456,13 +456,15 @@ class QuasistaticProblem:
         return reactions, self.mesh.comm.allreduce(local, op=MPI.SUM)
 
     def driving_displacement(self) -> Optional[float]:
-        """The size of what drives a displacement-controlled run at the current time: |d(t)| of
-        a moving obstacle's translation, else the mean |u_D| over the first time-dependent
-        prescribed component (collective); None when nothing moves."""
+        """What drives a displacement-controlled run at the current time, signed: the largest
+        component of a moving obstacle's translation d(t) (an indenter pushed down along z
+        gives its negative z), else the mean u_D over the first time-dependent prescribed
+        component (collective); None when nothing moves."""
         contact = self.contact
         t = float(self.time.value)
         if isinstance(contact, Signorini) and contact.translation is not None:
-            return float(np.linalg.norm(contact.translation(t)))
+            d = np.asarray(contact.translation(t), dtype=float).ravel()
+            return float(d[np.argmax(np.abs(d))]) if d.size else 0.0
         return self.dirichlet.mean_moving_value()
 
     def stress_correction_at_points(self) -> Optional[np.ndarray]:
