@@ -113,3 +113,39 @@ def test_unreadable_gmsh_file_is_a_located_error(shared_tmp_path):
     scene = scenes.load(_write(shared_tmp_path, BOTTOM))
     with pytest.raises(scenes.SceneError, match=r"block.toml:4: mesh.file: "):
         build(scene)
+
+
+def test_mesh_dimension_that_does_not_match_the_file_is_a_located_error(shared_tmp_path, capsys):
+    """A 2-D Gmsh mesh declared dim = 3 (and the reverse, which used to end in a UFL traceback)
+    is refused at mesh.dim by validate and by run: exit 2, nothing written."""
+    _rectangle_msh(shared_tmp_path / "block.msh")
+    path = _write(shared_tmp_path, BOTTOM)
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(path.read_text().replace("dim = 2", "dim = 3").replace(
+            'traction = [0.0, "-1e3*t"]', 'traction = [0.0, "-1e3*t", 0.0]'))
+    MPI.COMM_WORLD.barrier()
+    out = shared_tmp_path / "out"
+    for command in (["validate", str(path)], ["run", str(path), "--out", str(out)]):
+        assert cli.main(command) == 2
+        err = capsys.readouterr().err
+        if MPI.COMM_WORLD.rank == 0:
+            assert re.search(r"block.toml:5: mesh.dim: the Gmsh file holds a 2-D mesh but "
+                             r"dim = 3: set dim = 2", err), err
+    assert not out.exists()
+    if MPI.COMM_WORLD.rank == 0:  # a 3-D mesh declared 2-D
+        gmsh.initialize(["gmsh", "-v", "0"])
+        gmsh.model.add("box")
+        volume = gmsh.model.occ.addBox(0.0, 0.0, 0.0, 2.0, 1.0, 1.0)
+        gmsh.model.occ.synchronize()
+        gmsh.model.addPhysicalGroup(3, [volume], BODY)
+        gmsh.model.addPhysicalGroup(2, [s for _, s in gmsh.model.getBoundary([(3, volume)])], 1)
+        gmsh.option.setNumber("Mesh.CharacteristicLengthMax", 0.5)
+        gmsh.model.mesh.generate(3)
+        gmsh.write(str(shared_tmp_path / "block.msh"))
+        gmsh.finalize()
+        path.write_text(path.read_text().replace("dim = 3", "dim = 2").replace(
+            'traction = [0.0, "-1e3*t", 0.0]', 'traction = [0.0, "-1e3*t"]'))
+    MPI.COMM_WORLD.barrier()
+    with pytest.raises(scenes.SceneError, match=r"mesh.dim: the Gmsh file holds a 3-D mesh but "
+                                                r"dim = 2: set dim = 3"):
+        build(scenes.load(path))

@@ -158,6 +158,11 @@ def test_bad_dirichlet_parts_are_located(shared_tmp_path, capsys, old, new, matc
      r"contact part"),
     ('center = [0.0, 0.5]', 'center = [0.0, 0.3]',
      r"contact\.obstacle: contact point .* starts inside the obstacle"),
+    # a plane above the block whose normal points up, away from the body: named as such
+    ('shape = "cylinder", center = [0.0, 0.5], radius = 0.5',
+     'shape = "plane", point = [0.0, 0.1], normal = [0.0, 1.0]',
+     r"contact\.obstacle: the obstacle is on the body's side of its surface: .*a plane "
+     r"obstacle's normal must point towards the body: reverse it"),
     ('motion = [0, "-0.02*t"]', 'rotation = { center = [0.0, 0.4] }',
      r"contact\.rotation\.angle: missing required key"),
     ('motion = [0, "-0.02*t"]', 'rotation = { center = [0.0, 0.4], angle = "t", axis = [0, 0, 1] }',

@@ -21,7 +21,7 @@ LevelSet = Callable[[np.ndarray], np.ndarray]
 
 def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
                      max_distance: float, first_step: float | None = None,
-                     signed: bool = False) -> np.ndarray:
+                     signed: bool = False, check_side: bool = True) -> np.ndarray:
     """Distance from each point to the obstacle {φ ≤ 0} along ``normal``.
 
     Args:
@@ -33,6 +33,8 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
         signed: points inside the obstacle get g < 0, minus their distance to its surface
             backwards along the normal (an obstacle that has moved into the body's reference
             configuration, as an indenter does); otherwise they are an error.
+        check_side: refuse an obstacle that is on the body's side of its surface (see
+            :func:`_check_side`; off for a moved obstacle, which may have passed through).
 
     Returns:
         (N,) gaps (≥ 0 unless ``signed``).
@@ -62,6 +64,8 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
     touching = np.abs(f_lo) <= 1e-12 * (1.0 + np.abs(points).max(axis=1))
     f_lo = np.where(touching, 0.0, f_lo)
     inside = f_lo < 0
+    if check_side and inside.any():
+        _check_side(phi, points[inside], normal[inside], f_lo[inside])
     if signed and inside.any():
         gap = np.empty(n)
         gap[~inside] = gap_along_normal(phi, points[~inside], normal[~inside],
@@ -71,9 +75,10 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
                                         first_step=first_step)
         return gap
     if inside.any():
-        x = points[np.argmax(inside)]
-        raise InputError(f"contact point {x[:points.shape[1]].tolist()} starts inside the obstacle "
-                         f"(phi = {f_lo[np.argmax(inside)]:.3g} < 0)")
+        i = int(np.argmax(inside))
+        x = points[i][:points.shape[1]].tolist()
+        raise InputError(f"contact point {x} starts inside the obstacle "
+                         f"(phi = {f_lo[i]:.3g} < 0)")
     hi = np.where(f_lo == 0, 0.0, np.nan)
     step = first_step or max_distance / 2.0 ** 20
     s = np.full(n, step)
@@ -101,6 +106,21 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
         if np.all(hi - lo <= 4 * np.finfo(float).eps * np.maximum(hi, 1e-300)):
             break
     return hi
+
+
+def _check_side(phi: LevelSet, points: np.ndarray, normal: np.ndarray, values: np.ndarray) -> None:
+    """Raise if φ grows along the body's outward normal at every point inside the obstacle:
+    the obstacle is then on the body's side of its surface (a plane whose normal points away
+    from the body), whatever a ray would report. An indenter that has moved into the body is
+    the other way round: going outwards takes a point deeper into it."""
+    probe = 1e-6 * max(float(np.abs(values).max()), 1e-12)
+    ahead = np.broadcast_to(np.asarray(phi((points + probe * normal).T), dtype=np.float64),
+                            values.shape)
+    if np.all(ahead > values):
+        raise InputError(f"the obstacle is on the body's side of its surface: at contact point "
+                         f"{points[0].tolist()} phi = {values[0]:.3g} < 0 and phi grows along "
+                         "the body's outward normal (a plane obstacle's normal must point "
+                         "towards the body: reverse it)")
 
 
 def shape_level_set(shape: str, params: dict, dim: int) -> LevelSet:

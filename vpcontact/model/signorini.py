@@ -209,7 +209,8 @@ def contact_gap(contact: Signorini, cd: ContactDofs, time: float = 0.0) -> np.nd
         normals = np.zeros((len(points), 3))
         normals[:, :cd.normals.shape[1]] = cd.normals
         gap = gap_along_normal(contact.obstacle_at(time), points, normals,
-                               max_distance=contact.max_distance, signed=contact.moving)
+                               max_distance=contact.max_distance, signed=contact.moving,
+                               check_side=time == 0.0 or not contact.moving)
     elif callable(contact.gap):
         gap = np.broadcast_to(np.asarray(contact.gap(points.T), dtype=np.float64),
                               (len(points),)).copy()

@@ -128,19 +128,27 @@ def _read_gmsh(scene: Scene, comm):
     """
     from dolfinx.io import gmshio
     with gmsh_session(comm) as gmsh:
-        problem = None
+        problem, key = None, "mesh.file"
         if gmsh is not None:
             try:
                 gmsh.model.add("scene")
                 gmsh.merge(str(scene.mesh.file))
-                if not gmsh.model.getPhysicalGroups(scene.mesh.dim):
+                dims = sorted({d for d, _ in gmsh.model.getPhysicalGroups()})
+                model_dim = gmsh.model.getDimension()
+                if model_dim in (1, 2, 3) and model_dim != scene.mesh.dim:
+                    key = "mesh.dim"
+                    problem = (f"the Gmsh file holds a {model_dim}-D mesh but dim = "
+                               f"{scene.mesh.dim}: set dim = {model_dim}")
+                elif not gmsh.model.getPhysicalGroups(scene.mesh.dim):
                     problem = (f"the Gmsh file has no physical group of dimension "
-                               f"{scene.mesh.dim} (the cells to use)")
+                               f"{scene.mesh.dim} (the cells to use)"
+                               + (f"; its groups have dimension {', '.join(map(str, dims))}"
+                                  if dims else ""))
             except Exception as err:  # gmsh raises plain Exceptions for unreadable files
                 problem = f"cannot read the Gmsh file: {err}"
-        problem = comm.bcast(problem, root=0)
+        problem, key = comm.bcast((problem, key if gmsh is not None else None), root=0)
         if problem is not None:
-            raise scene.error("mesh.file", problem)
+            raise scene.error(key, problem)
         mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model if gmsh is not None else None,
                                                    comm, 0, gdim=scene.mesh.dim)
     return mesh, facet_tags
