@@ -211,6 +211,23 @@ def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, cap
         assert "the simulation failed" in capsys.readouterr().err
 
 
+def test_newton_that_diverges_to_nan_is_a_failed_step_not_a_traceback(shared_tmp_path, capsys):
+    """Stiff units (E = 1e9, σ_Y = 1) with the mixed formulation: the first step's Newton
+    iterate becomes non-finite; that is a failed step (rolled back, cut, and finally a clean
+    failure with exit 1), not the kernels' refusal of a non-finite strain as a traceback."""
+    path = _small("indentation_relaxation", shared_tmp_path, "[32, 16]", 0.05, 0.025)
+    text = re.sub(r"(?m)^E = .*$", "E = 1e9", path.read_text())
+    text = re.sub(r"(?m)^sigma_y = .*$", "sigma_y = 1.0", text)
+    text = re.sub(r"(?m)^k = .*$", "k = 0.025\nmax_cuts = 2", text)
+    write_shared(path, text)
+    out = shared_tmp_path / "nan"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 1
+    summary = _summary(out)
+    assert summary["completed"] is False and "did not converge" in summary["error"]
+    if MPI.COMM_WORLD.rank == 0:
+        assert "the simulation failed" in capsys.readouterr().err
+
+
 def test_explicit_scene_beyond_its_stability_limit_is_refused(shared_tmp_path, capsys):
     path = _small("signorini_2d", shared_tmp_path, "[4, 4]", 1.0, 0.5)
     text = path.read_text().replace('scheme = "implicit"', 'scheme = "explicit"')

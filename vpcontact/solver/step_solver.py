@@ -433,7 +433,10 @@ class StepSolver:
             reason, more = self._run(self.snes)
             its += more
             self.vi_solves += self._bounds is not None
-        self._load_iterate(self._x)
+        finite = self.u.function_space.mesh.comm.allreduce(
+            bool(np.isfinite(self._x.array).all()), op=MPI.LAND)
+        if reason > 0 or finite:  # (a diverged, non-finite iterate is not loaded: the kernels
+            self._load_iterate(self._x)  # refuse it, and the caller rolls the step back)
         if reason <= 0:
             ksp_reason = snes.getKSP().getConvergedReason()
             detail = f"last linear solve reason {ksp_reason}" if ksp_reason < 0 else ""
