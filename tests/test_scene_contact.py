@@ -385,3 +385,24 @@ def test_contact_csv_off_is_not_written(shared_tmp_path):
     assert not (out / "contact.csv").exists()
     assert not list(out.glob("*.png")) and not list(out.glob("*.xdmf"))
     assert (out / "reactions.csv").is_file() and (out / "summary.json").is_file()
+
+
+def test_obstacle_that_moves_away_is_reported_with_its_closest_approach(shared_tmp_path, capsys):
+    """An indenter driven away from the block runs (nothing is wrong with the scene) but the run
+    says that its contact part never touched, with the closest approach; a run with contact
+    says nothing."""
+    away = INDENTATION.replace('motion = [0, "-0.02*t"]', 'motion = [0, "0.02*t"]')
+    for name, text, warned in (("away", away, True), ("into", INDENTATION, False)):
+        scene = write_shared(shared_tmp_path / f"{name}.toml", text)
+        out = shared_tmp_path / name
+        assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+        warnings = json.loads((out / "summary.json").read_text())["warnings"]
+        err = capsys.readouterr().err
+        if warned:
+            assert len(warnings) == 1 and "'top' never touched" in warnings[0], warnings
+            # the cylinder starts touching the block at one node and leaves: clearance 0 at t = 0
+            assert re.search(r"closest approach [-0-9.e]+ at t = 0,", warnings[0]), warnings
+            if MPI.COMM_WORLD.rank == 0:
+                assert "warning: the contact part 'top' never touched" in err, err
+        else:
+            assert warnings == [] and "warning" not in err

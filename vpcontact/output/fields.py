@@ -8,6 +8,7 @@ rule's weights (exact for the paper's one-point P1/P0 pairing) into a DG0 tensor
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Optional
 
 import basix
 import numpy as np
@@ -202,6 +203,19 @@ class ContactHistory:
             self.normal_displacement = list(arrays["un"])
             self.pressure = list(arrays["pressure"])
             self.gaps = list(arrays["gap"])
+
+    def closest_approach(self) -> Optional[dict]:
+        """Whether any node ever carried a compressive pressure (exact for normal compliance,
+        whose pressure is 0 off contact; Signorini's inactive nodes carry round-off, so its
+        runs ask the VI's active set instead), and the smallest clearance gap − u_ν over the
+        run with its time and node (rank 0; None elsewhere or without records)."""
+        if self.comm.rank != 0 or not self.times or not len(self.points):
+            return None
+        touched = bool((np.array(self.pressure) < 0).any())
+        clearance = np.array(self.gaps) - np.array(self.normal_displacement)
+        k, i = np.unravel_index(int(np.argmin(clearance)), clearance.shape)
+        return {"touched": touched, "clearance": float(clearance[k, i]),
+                "time": float(self.times[k]), "point": self.points[i].tolist()}
 
     def write_csv(self, path: str | Path) -> None:
         """Long format: t, x, y, z, u_normal, gap, clearance, pressure, written by rank 0; the

@@ -84,6 +84,7 @@ class Session:
         wall = time.perf_counter() - start
         if record is not None and record.interrupted and error is None:
             error = Interrupted(record.interrupted, record.times[-1] if record.times else 0.0)
+        self.warnings = self._contact_warnings(history, record) if error is None else []
         try:
             self._write_summary(record, wall, error)
         except OSError as err:
@@ -95,11 +96,31 @@ class Session:
             self._figures(history, cells)
         self.comm.barrier()  # rank 0 has written every file
         if self.comm.rank == 0:
+            for warning in self.warnings:
+                print(f"warning: {warning}", file=sys.stderr)
             steps = len(record.times)
             print(f"{scene.name}: t = {record.times[-1]:.4g} in {steps} steps, "
                   f"{sum(record.newton_iterations)} Newton iterations, {len(record.cuts)} rejected, "
                   f"{wall:.1f} s on {self.comm.size} rank(s); outputs in {self.out.resolve()}")
         return 0
+
+    def _contact_warnings(self, history: Optional[ContactHistory], record) -> list:
+        """A contact part that never touched during the run (an obstacle that moved away, or
+        never came into reach): say so, with the closest approach (collective)."""
+        if history is None:
+            return []
+        approach = self.comm.bcast(history.closest_approach(), root=0)
+        if approach is None:
+            return []
+        touched = (any(c.active > 0 for c in record.contact) if record.contact
+                   else approach["touched"])
+        if touched:
+            return []
+        point = ", ".join(f"{c:.4g}" for c in approach["point"][:self.model.scene.dim])
+        return [f"the contact part '{self.model.scene.contact.boundary}' never touched the "
+                f"obstacle or foundation: closest approach {approach['clearance']:.4g} at "
+                f"t = {approach['time']:.4g}, at ({point}); check [contact] (its gap, obstacle "
+                "and motion) if contact was expected"]
 
     def _history(self) -> Optional[ContactHistory]:
         """Contact nodes to record: Signorini's own, or normal compliance's on a planar Γ3."""
@@ -200,6 +221,7 @@ class Session:
             "kernel_calls": solver.kernel_calls,
             "vi_solves": solver.vi_solves,
             "vi_linear_solves": None if solver.lagged_lu is None else solver.lagged_lu.counters(),
+            "warnings": getattr(self, "warnings", []),
         }
         def write():
             self.out.mkdir(parents=True, exist_ok=True)
