@@ -228,6 +228,24 @@ def test_newton_that_diverges_to_nan_is_a_failed_step_not_a_traceback(shared_tmp
         assert "the simulation failed" in capsys.readouterr().err
 
 
+def test_round_off_floor_of_a_displacement_driven_run_in_stiff_units(shared_tmp_path):
+    """E = 1e9, σ_Y = 1, the paper's P1, driven by the indenter's motion with no load: after
+    step cuts a step's initial residual is at the round-off floor of the internal forces (about
+    1.5e-9 here), where Newton stalls. The round-off stop now measures the residual against the
+    support reactions (it measured it against the applied loads, zero here, and the step failed
+    with DIVERGED_MAX_IT until snes_atol was raised by hand)."""
+    path = _small("indentation_relaxation", shared_tmp_path, "[32, 16]", 0.05, 0.025,
+                  extra="\n[discretization]\nformulation = \"displacement\"\ndegree = 1\n")
+    text = re.sub(r"(?m)^E = .*$", "E = 1e9", path.read_text())
+    text = re.sub(r"(?m)^sigma_y = .*$", "sigma_y = 1.0", text)
+    write_shared(path, text)
+    out = shared_tmp_path / "stiff"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    summary = _summary(out)
+    assert summary["completed"] and math.isclose(summary["final_time"], 0.05)
+    assert all(r.startswith("CONVERGED") for r in summary["converged_reasons"])
+
+
 def test_explicit_scene_beyond_its_stability_limit_is_refused(shared_tmp_path, capsys):
     path = _small("signorini_2d", shared_tmp_path, "[4, 4]", 1.0, 0.5)
     text = path.read_text().replace('scheme = "implicit"', 'scheme = "explicit"')

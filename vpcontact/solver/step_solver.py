@@ -82,6 +82,8 @@ class StepSolver:
         self._bc_dofs = np.concatenate([bc.dof_indices()[0] for bc in self.bcs] or
                                        [np.zeros(0, dtype=np.int32)])
         self._force_scale = 0.0
+        self._round_off_scale = 0.0
+        self._b_free = None  # residual without Dirichlet conditions (the round-off scale)
         self._point_forces = point_forces
         self.constant_jacobian = constant_jacobian
         self._jacobian_dt: Optional[float] = None  # step size of the assembled constant Jacobian
@@ -302,8 +304,12 @@ class StepSolver:
 
         Converged when ||F|| <= atol, or ||F|| <= rtol ||F_0||, or when the step is round-off
         relative to the solution (||dx|| <= stol ||x||) while ||F|| <= stall_rtol max(||F_0||,
-        ||load||): with E ~ 1e8 and accumulated strains ~ 1e-2 the residual cannot drop below
-        ~ eps E |ε| however small the step's load increment (and so ||F_0||) is.
+        ||load||, ||f||): with E ~ 1e8 and accumulated strains ~ 1e-2 the residual cannot drop
+        below ~ eps E |ε| however small the step's load increment (and so ||F_0||) is. f is
+        the residual at the step's initial guess without Dirichlet conditions (its Dirichlet
+        rows are the support reactions): in a run driven by prescribed displacements, with no
+        load, it is what sets the round-off floor (a held step in stiff units, E = 1e9, stalled
+        there).
         """
         xnorm, ynorm, fnorm = norms
         rtol, atol, stol, _ = snes.getTolerances()
@@ -318,7 +324,7 @@ class StepSolver:
         if fnorm <= rtol * self._fnorm0:
             return _SNES_REASON.CONVERGED_FNORM_RELATIVE
         if ynorm <= stol * xnorm and fnorm <= self._stall_rtol * max(self._fnorm0,
-                                                                      self._force_scale):
+                                                                      self._round_off_scale):
             return _SNES_REASON.CONVERGED_SNORM_RELATIVE
         return _SNES_REASON.ITERATING
 
@@ -345,6 +351,17 @@ class StepSolver:
         x.copy(self._loaded)
         self._loaded_valid = True
         self.timings["kernel"] += _time.perf_counter() - start
+
+    def _free_residual_norm(self) -> float:
+        """||F|| at the initial guess with no Dirichlet condition applied: the interior
+        imbalance and, in the Dirichlet rows, the support reactions (physical units)."""
+        self._load_iterate(self._x)
+        if self._b_free is None:
+            self._b_free = self.fields.create_vector()
+        start = _time.perf_counter()
+        self.fields.assemble_residual(self._b_free, self._xp, [], self._free_point_forces())
+        self.timings["residual"] += _time.perf_counter() - start
+        return self._b_free.norm()
 
     def _free_point_forces(self):
         """(dofs, values) of the point forces at dofs no Dirichlet condition prescribes, or None."""
@@ -418,6 +435,7 @@ class StepSolver:
         elif self.scale != 1.0:
             self._x.scale(1.0 / self.scale)
         self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
+        self._round_off_scale = max(self._force_scale, self._free_residual_norm())
         its = 0
         snes = self.snes
         if try_unconstrained and self._free_snes is not None:
@@ -457,7 +475,7 @@ class StepSolver:
 
     def destroy(self) -> None:
         """Free the PETSc objects."""
-        for obj in (self.snes, self._free_snes, self._A, self._b, self._x, self._loaded,
+        for obj in (self.snes, self._free_snes, self._A, self._b, self._x, self._loaded, self._b_free,
                     self._load_vec, self._A_phys, self._b_phys, self._columns, self._block):
             if obj is not None:
                 obj.destroy()
