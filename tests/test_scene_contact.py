@@ -153,9 +153,9 @@ def test_bad_dirichlet_parts_are_located(shared_tmp_path, capsys, old, new, matc
      r"contact\.obstacle\.normal: not a parameter of shape 'cylinder'"),
     ('motion = [0, "-0.02*t"]', 'motion = ["-0.02*t"]', r"contact\.motion: expected 2 components"),
     ('motion = [0, "-0.02*t"]', 'motion = [0, "x[0]"]', r"contact\.motion\[1\]: invalid expression"),
-    ('box = { lower = [-0.4, 0.0], upper = [0.4, 0.0] }', 'plane = { axis = "y", value = 0.0 }',
-     r"contact\.obstacle: the ray from contact point .* misses the obstacle .*restrict the "
-     r"contact part"),
+    ('center = [0.0, 0.5]', 'center = [5.0, 0.5]',
+     r"contact\.obstacle: no contact node's normal ray meets the obstacle within "
+     r"max_distance = 1000: it is not in front of the contact part"),
     ('center = [0.0, 0.5]', 'center = [0.0, 0.3]',
      r"contact\.obstacle: contact point .* starts inside the obstacle"),
     # a plane above the block whose normal points up, away from the body: named as such
@@ -406,3 +406,38 @@ def test_obstacle_that_moves_away_is_reported_with_its_closest_approach(shared_t
                 assert "warning: the contact part 'top' never touched" in err, err
         else:
             assert warnings == [] and "warning" not in err
+
+
+def test_contact_nodes_whose_rays_miss_the_obstacle_get_no_contact(shared_tmp_path, capsys):
+    """The whole top as the contact part of the indentation: the vertical rays of the nodes
+    beyond the cylinder's width miss it. They are left without contact (gap = max_distance),
+    the run says how many, and the contact forces equal the run whose part is restricted to
+    where the cylinder lies (they were refused with advice to raise max_distance)."""
+    whole = INDENTATION.replace('box = { lower = [-0.4, 0.0], upper = [0.4, 0.0] }',
+                                'plane = { axis = "y", value = 0.0 }')
+    forces = {}
+    for name, text in (("whole", whole), ("restricted", INDENTATION)):
+        scene = write_shared(shared_tmp_path / f"{name}.toml", text)
+        out = shared_tmp_path / name
+        assert cli.main(["validate", str(scene)]) == 0
+        assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+        header, rows = _csv(out / "reactions.csv")
+        forces[name] = rows[:, header.index("contact_y")]
+        warnings = json.loads((out / "summary.json").read_text())["warnings"]
+        err = capsys.readouterr().err
+        if name == "whole":
+            assert len(warnings) == 1 and re.search(
+                r"^\d+ node\(s\) of the contact part 'top' face away from the obstacle",
+                warnings[0]), warnings
+            if MPI.COMM_WORLD.rank == 0:
+                assert "face away from the obstacle" in err
+            contact = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
+            far = contact[np.abs(contact[:, 1]) > 0.55]
+            # no gap within reach, and no pressure beyond the residual's round-off
+            assert len(far) and np.all(far[:, 5] == 1000.0)
+            assert np.abs(far[:, 7]).max() <= 1e-9 * np.abs(contact[:, 7]).max()
+        else:
+            assert warnings == []
+    assert np.abs(forces["whole"]).max() > 0
+    np.testing.assert_allclose(forces["whole"], forces["restricted"], rtol=1e-8,
+                               atol=1e-10 * np.abs(forces["restricted"]).max())

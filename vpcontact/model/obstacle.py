@@ -21,7 +21,8 @@ LevelSet = Callable[[np.ndarray], np.ndarray]
 
 def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
                      max_distance: float, first_step: float | None = None,
-                     signed: bool = False, check_side: bool = True) -> np.ndarray:
+                     signed: bool = False, check_side: bool = True,
+                     may_miss: np.ndarray | None = None) -> np.ndarray:
     """Distance from each point to the obstacle {φ ≤ 0} along ``normal``.
 
     Args:
@@ -35,6 +36,9 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
             configuration, as an indenter does); otherwise they are an error.
         check_side: refuse an obstacle that is on the body's side of its surface (see
             :func:`_check_side`; off for a moved obstacle, which may have passed through).
+        may_miss: (N,) mask of points whose ray may miss: they get the gap ``max_distance``
+            (no obstacle within reach along their normal: no contact there, as at the rim of a
+            curved face whose normal turns parallel to a plane obstacle). Others raise.
 
     Returns:
         (N,) gaps (≥ 0 unless ``signed``).
@@ -69,7 +73,8 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
     if signed and inside.any():
         gap = np.empty(n)
         gap[~inside] = gap_along_normal(phi, points[~inside], normal[~inside],
-                                        max_distance=max_distance, first_step=first_step)
+                                        max_distance=max_distance, first_step=first_step,
+                                        may_miss=None if may_miss is None else may_miss[~inside])
         gap[inside] = -gap_along_normal(lambda x: -np.asarray(phi(x)), points[inside],
                                         -normal[inside], max_distance=max_distance,
                                         first_step=first_step)
@@ -90,7 +95,13 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
         lo = np.where(open_ & ~crossed, s, lo)
         open_ &= ~crossed
         if open_.any() and s[open_].min() > max_distance:
-            i = int(np.argmax(open_ & (s > max_distance)))
+            beyond = open_ & (s > max_distance)
+            if may_miss is not None and np.all(may_miss[beyond]):
+                lo = np.where(beyond, max_distance, lo)
+                hi = np.where(beyond, max_distance, hi)
+                open_ &= ~beyond
+                continue
+            i = int(np.argmax(beyond & (True if may_miss is None else ~may_miss)))
             raise InputError(f"the ray from contact point {points[i].tolist()} along the normal "
                              f"{normal[i].round(12).tolist()} misses the obstacle within "
                              f"{max_distance:g} (restrict the contact part to where the "

@@ -104,6 +104,8 @@ class ContactDofs:
     normals: np.ndarray       # (n, dim) unit outward normals
     signs: np.ndarray         # per node: ũ_slot = sign u·ν
     frames: Optional[Frames] = None  # local frames (general Γ3 only)
+    #: nodes whose normal ray missed the obstacle at t = 0 (gap = max_distance: no contact)
+    unreachable: Optional[np.ndarray] = None
 
     @property
     def rotated(self) -> bool:
@@ -179,7 +181,20 @@ def contact_dofs(V: fem.FunctionSpace, facet_tags, contact: Signorini,
     dofs = (nodes * bs + fr.slots).astype(np.int32)
     cd = ContactDofs(None, 1.0, dofs, points, np.zeros(len(nodes)), nodes, fr.normals, fr.signs, fr)
     cd.gap = contact_gap(contact, cd, time)
+    _check_reach(mesh.comm, contact, cd)
     return cd
+
+
+def _check_reach(comm, contact: Signorini, cd: ContactDofs) -> None:
+    """Nodes whose rays miss the obstacle are left without contact, but not all of them: then
+    the obstacle is not in front of the contact part at all (collective)."""
+    missed = 0 if cd.unreachable is None else int(np.count_nonzero(cd.unreachable))
+    missed, total = comm.allreduce(missed), comm.allreduce(len(cd.gap))
+    if total and missed == total:
+        raise InputError(f"no contact node's normal ray meets the obstacle within "
+                         f"max_distance = {contact.max_distance:g}: it is not in front of the "
+                         "contact part (check the obstacle's place, or raise "
+                         "contact.max_distance if it is farther)")
 
 
 def _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time) -> ContactDofs:
@@ -198,6 +213,7 @@ def _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time) -> Con
     cd = ContactDofs(axis, sign, parent, points, np.zeros(len(parent)),
                      (parent // bs).astype(np.int32), normals, np.full(len(parent), sign))
     cd.gap = contact_gap(contact, cd, time)
+    _check_reach(V.mesh.comm, contact, cd)
     return cd
 
 
@@ -208,9 +224,13 @@ def contact_gap(contact: Signorini, cd: ContactDofs, time: float = 0.0) -> np.nd
     if contact.obstacle is not None:
         normals = np.zeros((len(points), 3))
         normals[:, :cd.normals.shape[1]] = cd.normals
+        first = cd.unreachable is None  # the nodes set up: rays may miss (no contact there)
         gap = gap_along_normal(contact.obstacle_at(time), points, normals,
                                max_distance=contact.max_distance, signed=contact.moving,
-                               check_side=time == 0.0 or not contact.moving)
+                               check_side=time == 0.0 or not contact.moving,
+                               may_miss=np.ones(len(points), bool) if first else cd.unreachable)
+        if first:
+            cd.unreachable = gap >= contact.max_distance
     elif callable(contact.gap):
         gap = np.broadcast_to(np.asarray(contact.gap(points.T), dtype=np.float64),
                               (len(points),)).copy()

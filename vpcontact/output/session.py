@@ -109,18 +109,28 @@ class Session:
         never came into reach): say so, with the closest approach (collective)."""
         if history is None:
             return []
+        warnings = []
+        cd = history.cdofs
+        missed = self.comm.allreduce(0 if cd.unreachable is None
+                                     else int(np.count_nonzero(cd.unreachable)))
+        if missed:
+            warnings.append(f"{missed} node(s) of the contact part "
+                            f"'{self.model.scene.contact.boundary}' face away from the obstacle "
+                            "(their normal rays miss it within max_distance, e.g. at the rim of a "
+                            "curved face): no contact there (contact.csv: gap = max_distance)")
         approach = self.comm.bcast(history.closest_approach(), root=0)
         if approach is None:
-            return []
+            return warnings
         touched = (any(c.active > 0 for c in record.contact) if record.contact
                    else approach["touched"])
         if touched:
-            return []
+            return warnings
         point = ", ".join(f"{c:.4g}" for c in approach["point"][:self.model.scene.dim])
-        return [f"the contact part '{self.model.scene.contact.boundary}' never touched the "
-                f"obstacle or foundation: closest approach {approach['clearance']:.4g} at "
-                f"t = {approach['time']:.4g}, at ({point}); check [contact] (its gap, obstacle "
-                "and motion) if contact was expected"]
+        return warnings + [
+            f"the contact part '{self.model.scene.contact.boundary}' never touched the obstacle "
+            f"or foundation: closest approach {approach['clearance']:.4g} at "
+            f"t = {approach['time']:.4g}, at ({point}); check [contact] (its gap, obstacle and "
+            "motion) if contact was expected"]
 
     def _history(self) -> Optional[ContactHistory]:
         """Contact nodes to record: Signorini's own, or normal compliance's on a planar Γ3."""
