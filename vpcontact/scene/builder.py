@@ -1,10 +1,10 @@
 # SPDX-License-Identifier: MIT
-"""From a scene (:mod:`vpcontact.scene`) to a :class:`~vpcontact.problem.QuasistaticProblem`.
+"""From a scene (:mod:`vpcontact.scene`) to a :class:`~vpcontact.solver.problem.QuasistaticProblem`.
 
 Only what the scene calls for is built: an elastic law runs the linear stress update (never the
 viscoplastic kernel), a scene without ``[contact]`` gets neither a compliance term nor a
 variational inequality, and a law linear in ε is factorized once per step size
-(see :class:`~vpcontact.nonlinear.StepSolver`). Problems found on the mesh (a boundary part
+(see :class:`~vpcontact.solver.step_solver.StepSolver`). Problems found on the mesh (a boundary part
 that selects no facets, parts that overlap, a Gmsh tag that does not exist, a point load off
 the vertices) are reported with their place in the scene file.
 """

@@ -318,7 +318,7 @@ def read_discretization(top: Table, dim: int | None, material: MaterialSpec,
 
     ``formulation = "auto"`` (the default) is ``"mixed"`` (Taylor–Hood P2–P1, free of
     volumetric locking) where P_k displacements lock — 3-D or plane strain with Perzyna's
-    isochoric flow, or elasticity with ν ≥ 0.45 (:func:`vpcontact.model.fields.locking_expected`)
+    isochoric flow, or elasticity with ν ≥ 0.45 (:func:`vpcontact.model.locking.locking_expected`)
     — unless ``degree = 1`` is asked for (the paper's P1/P0 scheme), else ``"displacement"``.
     """
     t = top.section("discretization", ("degree", "formulation"))

@@ -2,7 +2,7 @@
 """The sections of a resolved scene, as frozen dataclasses with every default filled in.
 
 They mirror the tables of a scene file (see :mod:`vpcontact.scene`). Expression-valued entries hold
-:class:`vpcontact.expressions.Expression` objects; entries that do not apply to a scene (e.g.
+:class:`vpcontact.scene.expressions.Expression` objects; entries that do not apply to a scene (e.g.
 ``material.nu`` in 1-D or ``mesh.cells`` of a Gmsh mesh) are ``None``.
 """
 

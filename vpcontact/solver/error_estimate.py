@@ -39,7 +39,7 @@ def _scheme_result(order: int, steps: Sequence[float], y) -> float:
     k = steps[0]
     if order == 1:  # u_n = u_{n-1} + k u'(t_n)
         return y(-k)
-    k1 = steps[1]  # variable-step BDF2 as in vpcontact.problem._Bdf2
+    k1 = steps[1]  # variable-step BDF2 as in vpcontact.solver.bdf2.Bdf2
     omega = k / k1
     a1, a2 = (1 + omega) ** 2 / (1 + 2 * omega), -omega**2 / (1 + 2 * omega)
     return a1 * y(-k) + a2 * y(-k - k1)

@@ -72,7 +72,7 @@ class QuasistaticProblem:
             or 2 for the mixed formulation).
         formulation: "displacement" (u alone) or "mixed" (Taylor–Hood P2–P1 displacement and
             pressure, free of volumetric locking; see :mod:`vpcontact.model.fields`). None:
-            mixed where P_k displacements lock (:func:`~vpcontact.model.fields.locks`: 3-D or
+            mixed where P_k displacements lock (:func:`~vpcontact.model.locking.locks`: 3-D or
             plane strain with Perzyna's isochoric flow, or ν ≥ 0.45) unless ``degree`` is 1,
             else displacement.
         linear: the linear solver, "direct" (MUMPS), "iterative" (multigrid; a block

@@ -6,7 +6,7 @@ refined ``2^i`` times per direction, the step divided by ``2^j``, the displaceme
 law's scheme (explicit/implicit Euler) and the time scheme (Euler/BDF2). Every run is sampled on
 the same grid: the vertices of the coarsest mesh (a vertex of every refinement, so P1 and P2
 runs are compared at their own nodal values, without interpolation) at the multiples of the
-coarsest step (every run lands on them: :func:`vpcontact.stepping.advance` ends exactly at its
+coarsest step (every run lands on them: :func:`vpcontact.solver.stepping.advance` ends exactly at its
 final time). The error of a run is
 
     max over sampled times t and vertices x of |u_run(x, t) - u_ref(x, t)|   (all components),
