@@ -63,7 +63,7 @@ def run(out: str | Path = "output/indentation_relaxation", cells: tuple[int, int
     text = re.sub(r"(?m)^cells = .*$", f"cells = [{cells[0]}, {cells[1]}]", text)
     text = re.sub(r"(?m)^k = .*$", f"k = {k}", text)
     scene = scenes.loads_text(text, scenes.bundled()["indentation_relaxation"])
-    session = Session(build(scene), Path(out), progress=False)
+    session = Session(build(scene), Path(out))
     session.run()
     _relaxation_figure(Path(out), session)
     return session

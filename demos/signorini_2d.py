@@ -66,7 +66,8 @@ def run(out: str | Path = "output/signorini_2d", n: int | None = None, dt: float
                                  "2-D Signorini problem: von Mises norm at t = T")
     plots.contact_evolution(Path(out) / "fig2_contact_evolution.png", history, axis=0,
                             title="2-D Signorini problem: vertical displacement of the contact nodes")
-    runner.print_summary(record, Path(out), MPI.COMM_WORLD, force_unit="N/m")
+    if MPI.COMM_WORLD.rank == 0:
+        print(runner.summary_text(record, Path(out), MPI.COMM_WORLD, force_unit="N/m"))
     return record
 
 

@@ -65,7 +65,8 @@ def run(out: str | Path = "output/signorini_3d", n: int | None = None, dt: float
     plots.contact_evolution(Path(out) / "fig4_contact_evolution.png", history, axis=0, line=(1, 0.5),
                             obstacle=False,
                             title="3-D Signorini problem: u3 of the contact nodes on x2 = 0.5")
-    runner.print_summary(record, Path(out), MPI.COMM_WORLD, force_unit="N")
+    if MPI.COMM_WORLD.rank == 0:
+        print(runner.summary_text(record, Path(out), MPI.COMM_WORLD, force_unit="N"))
     return record
 
 

@@ -69,6 +69,15 @@ def configure_logging(verbose: bool = False) -> None:
     for handler in logging.getLogger().handlers:
         handler.setLevel(level)
     logging.getLogger().setLevel(level)
+    # vpcontact's own messages (e.g. the step lines of a demo's run) as plain lines on stdout
+    ours = logging.getLogger("vpcontact")
+    if not any(getattr(h, "_vpcontact", False) for h in ours.handlers):
+        handler = logging.StreamHandler(sys.stdout)
+        handler.setFormatter(logging.Formatter("%(message)s"))
+        handler._vpcontact = True
+        ours.addHandler(handler)
+    ours.setLevel(logging.INFO)
+    ours.propagate = False
 
 
 def run_script(main) -> None:
@@ -198,6 +207,7 @@ def _run(args, comm) -> int:
     from vpcontact.output.interrupt import StopRequest
     from vpcontact.output.lock import OutputLock, check_folder
     from vpcontact.output.session import Session
+    from vpcontact.progress import ProgressBar
     from vpcontact.scene.builder import build
     scene = _load(args.scene)
     extra = _petsc_options(args.petsc_options)
@@ -213,10 +223,22 @@ def _run(args, comm) -> int:
         model = build(scene, comm)
         lock = OutputLock(out, comm)
         try:
-            return Session(model, out, progress=not args.quiet, stop=stop,
-                           resume=args.resume).run()
+            bar = ProgressBar(scene.time.T) if not args.quiet and comm.rank == 0 else None
+            try:
+                result = Session(model, out, progress=bar.update if bar else None, stop=stop,
+                                 resume=args.resume).run()
+            finally:
+                if bar is not None:
+                    bar.close()
         finally:
             lock.release()
+    if comm.rank == 0:
+        for warning in result.warnings:
+            print(f"warning: {warning}", file=sys.stderr)
+        print(f"{result.name}: t = {result.final_time:.4g} in {result.steps} steps, "
+              f"{result.newton_iterations} Newton iterations, {result.rejected} rejected, "
+              f"{result.wall_time:.1f} s on {result.ranks} rank(s); outputs in {result.out}")
+    return 0
 
 
 def _study_setup(args, comm):

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import logging
 import time as _time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -13,6 +14,10 @@ from vpcontact.output.fields import CellStress, ContactHistory, XdmfSeries
 from vpcontact.errors import OutputError, VpcontactError
 from vpcontact.output.checkpoint import Checkpointer, Restart, restore_control
 from vpcontact.output.forces import ForceHistory
+
+#: Step lines (``verbose``) go to this logger at INFO; :func:`vpcontact.cli.configure_logging`
+#: shows vpcontact's INFO messages on standard output.
+log = logging.getLogger(__name__)
 from vpcontact.solver.problem import QuasistaticProblem
 from vpcontact.model.signorini import ContactReport
 from vpcontact.solver.stepping import Cut, StepControl, advance
@@ -136,8 +141,8 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                 progress(step, report)
             if verbose and comm.rank == 0:
                 active = f"  active contact dofs {report.active:4d}" if report else ""
-                print(f"step {step.step:4d}  t = {step.time:.4f}  Newton its {step.newton_iterations}"
-                      f"{active}", flush=True)
+                log.info("step %4d  t = %.4f  Newton its %d%s", step.step, step.time,
+                         step.newton_iterations, active)
             interrupted = stop.agreed(comm) if stop is not None else None
             if checkpoints is not None and (interrupted or checkpoints.due(step.step)):
                 with _timed(record, out):
@@ -171,17 +176,16 @@ def _restore_record(record: RunRecord, saved: dict) -> None:
     record.cuts = [Cut(**c) for c in saved["cuts"]]
 
 
-def print_summary(record: RunRecord, out: Path, comm, force_unit: str = "N") -> None:
-    """One paragraph on rank 0: final contact state, Newton effort, rejected steps, wall time."""
-    if comm.rank != 0:
-        return
+def summary_text(record: RunRecord, out: Path, comm, force_unit: str = "N") -> str:
+    """Two lines: final contact state, Newton effort, rejected steps, wall time; the outputs'
+    folder (for a script or the command line to print)."""
     last = f"t = {record.times[-1]:.4g}" if record.times else "no step"
     contact = ""
     if record.contact:
         c = record.contact[-1]
         contact = (f"{c.active} contact nodes active, max penetration {c.max_penetration:.2e} m, "
                    f"contact force {c.normal_force:.4g} {force_unit}; ")
-    print(f"{last}: {contact}{sum(record.newton_iterations)} Newton iterations in "
-          f"{len(record.times)} steps ({len(record.cuts)} rejected and retried with half the step), "
-          f"{record.wall_time:.1f} s on {comm.size} rank(s)")
-    print(f"outputs written to {Path(out).resolve()}")
+    return (f"{last}: {contact}{sum(record.newton_iterations)} Newton iterations in "
+            f"{len(record.times)} steps ({len(record.cuts)} rejected and retried with half the "
+            f"step), {record.wall_time:.1f} s on {comm.size} rank(s)\n"
+            f"outputs written to {Path(out).resolve()}")

@@ -19,7 +19,8 @@ import platform
 import sys
 import time
 from pathlib import Path
-from typing import Optional
+from dataclasses import dataclass
+from typing import Callable, Optional
 
 import numpy as np
 from dolfinx import fem
@@ -34,22 +35,42 @@ from vpcontact.scene.builder import Model, obstacle_level_set
 from vpcontact.solver.snes_options import time_split
 
 
-class Session:
-    """Run ``model`` to its final time, writing into ``out``."""
+@dataclass(frozen=True)
+class SessionResult:
+    """What a completed run reports (the command line prints it)."""
 
-    def __init__(self, model: Model, out: Path, progress: bool = True, stop=None,
-                 resume: bool = False):
+    name: str
+    final_time: float
+    steps: int
+    newton_iterations: int
+    rejected: int
+    wall_time: float
+    ranks: int
+    out: Path
+    warnings: tuple
+
+
+class Session:
+    """Run ``model`` to its final time, writing into ``out``.
+
+    Args:
+        progress: called after every step with (t, Newton iterations, active contact nodes or
+            None), on every rank (the command line draws its progress bar on rank 0).
+    """
+
+    def __init__(self, model: Model, out: Path,
+                 progress: Optional[Callable[[float, int, Optional[int]], None]] = None,
+                 stop=None, resume: bool = False):
         self.model = model
         self.out = Path(out)
         self.comm = model.problem.mesh.comm
-        self.show_progress = progress
+        self.progress = progress
         self.stop = stop  # a StopRequest (SIGINT/SIGTERM), asked after every step
         self.resume = resume
         self.restart = None
-        self._bar = _ProgressBar(model.scene.time.T) if progress and self.comm.rank == 0 else None
 
-    def run(self) -> int:
-        """Simulate; return the exit status (0 completed, 1 failed with outputs kept).
+    def run(self) -> SessionResult:
+        """Simulate; return what the completed run reports.
 
         Raises:
             Interrupted: a signal stopped the run (outputs, checkpoint and summary written).
@@ -79,8 +100,6 @@ class Session:
                 restart=self.restart, record=record)
         except Exception as err:  # re-raised below once the summary is on disk
             error = _located(scene, err)
-        if self._bar is not None:
-            self._bar.close()
         wall = time.perf_counter() - start
         if record is not None and record.interrupted and error is None:
             error = Interrupted(record.interrupted, record.times[-1] if record.times else 0.0)
@@ -95,14 +114,9 @@ class Session:
         if scene.output.figures:
             self._figures(history, cells)
         self.comm.barrier()  # rank 0 has written every file
-        if self.comm.rank == 0:
-            for warning in self.warnings:
-                print(f"warning: {warning}", file=sys.stderr)
-            steps = len(record.times)
-            print(f"{scene.name}: t = {record.times[-1]:.4g} in {steps} steps, "
-                  f"{sum(record.newton_iterations)} Newton iterations, {len(record.cuts)} rejected, "
-                  f"{wall:.1f} s on {self.comm.size} rank(s); outputs in {self.out.resolve()}")
-        return 0
+        return SessionResult(scene.name, record.times[-1], len(record.times),
+                             sum(record.newton_iterations), len(record.cuts), wall,
+                             self.comm.size, self.out.resolve(), tuple(self.warnings))
 
     def _contact_warnings(self, history: Optional[ContactHistory], record) -> list:
         """A contact part that never touched during the run (an obstacle that moved away, or
@@ -185,9 +199,9 @@ class Session:
         return [(field, refresh)]
 
     def _progress(self, step, report) -> None:
-        if self._bar is not None:
-            active = report.active if report is not None else None
-            self._bar.update(step.time, step.newton_iterations, active)
+        if self.progress is not None:
+            self.progress(step.time, step.newton_iterations,
+                          report.active if report is not None else None)
 
     def _figures(self, history, cells) -> None:
         scene, problem = self.model.scene, self.model.problem
@@ -263,29 +277,3 @@ def _versions() -> dict:
     return {"vpcontact": __version__, "dolfinx": dolfinx.__version__,
             "petsc": ".".join(map(str, PETSc.Sys.getVersion())), "python": sys.version.split()[0],
             "platform": platform.platform()}
-
-
-class _ProgressBar:
-    """One line on a terminal, rewritten each step; a line every 10 % of T otherwise."""
-
-    def __init__(self, t_final: float, width: int = 30):
-        self.t_final = t_final
-        self.width = width
-        self.tty = sys.stdout.isatty()
-        self._next = 0.1
-
-    def update(self, t: float, its: int, active: Optional[int]) -> None:
-        frac = min(t / self.t_final, 1.0)
-        contact = f"  active contact nodes {active}" if active is not None else ""
-        text = (f"[{'#' * int(frac * self.width):{self.width}s}] {100 * frac:5.1f}%  t = {t:.4g}"
-                f"  Newton its {its}{contact}")
-        if self.tty:
-            print("\r" + text, end="", flush=True)
-        elif frac >= self._next - 1e-12 or frac >= 1.0:
-            print(text, flush=True)
-            while self._next <= frac + 1e-12:
-                self._next += 0.1
-
-    def close(self) -> None:
-        if self.tty:
-            print(flush=True)
