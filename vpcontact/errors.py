@@ -13,7 +13,17 @@ class VpcontactError(Exception):
 
 
 class InputError(VpcontactError, ValueError):
-    """A parameter, scene entry or mesh does not describe a valid problem."""
+    """A parameter, scene entry or mesh does not describe a valid problem.
+
+    Attributes:
+        key: the scene key the problem concerns (e.g. ``"contact.obstacle"``), set by the code
+            that found it, so that a scene builder can locate it in the file without reading
+            the message; None when no scene key applies.
+    """
+
+    def __init__(self, message: str, key: str | None = None):
+        super().__init__(message)
+        self.key = key
 
 
 class SolverOptionError(InputError):
@@ -25,7 +35,7 @@ class SolverOptionError(InputError):
     """
 
     def __init__(self, message: str, option: str | None = None):
-        super().__init__(message)
+        super().__init__(message, key="solver.petsc_options")
         self.option = option
 
 

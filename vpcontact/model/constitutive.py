@@ -49,14 +49,17 @@ class Elasticity:
 
     def __post_init__(self):
         if self.model not in kernels.MODELS:
-            raise InputError(f"unknown model {self.model!r}; expected one of {kernels.MODELS}")
+            raise InputError(f"unknown model {self.model!r}; expected one of {kernels.MODELS}",
+                             key="law")
         if not (math.isfinite(self.E) and self.E > 0):
-            raise InputError(f"Young's modulus E must be finite and > 0, got {self.E}")
+            raise InputError(f"Young's modulus E must be finite and > 0, got {self.E}",
+                             key="material.E")
         if self.model != "1d" and not -1.0 < self.nu <= 0.5:
-            raise InputError(f"Poisson's ratio nu must lie in (-1, 0.5], got {self.nu}")
+            raise InputError(f"Poisson's ratio nu must lie in (-1, 0.5], got {self.nu}",
+                             key="material.nu")
         if self.incompressible and self.model not in ("3d", "3d_standard"):
             raise InputError("Poisson's ratio nu = 0.5 (incompressible) needs a 3-D or "
-                             f"plane-strain model, got {self.model!r}")
+                             f"plane-strain model, got {self.model!r}", key="material.nu")
 
     @property
     def incompressible(self) -> bool:
@@ -96,7 +99,8 @@ class Elasticity:
 
 def _check_scheme(scheme: str) -> None:
     if scheme not in SCHEMES:
-        raise InputError(f"unknown time scheme {scheme!r}; expected one of {SCHEMES}")
+        raise InputError(f"unknown time scheme {scheme!r}; expected one of {SCHEMES}",
+                         key="law.scheme")
 
 
 @dataclass(frozen=True)
@@ -161,9 +165,11 @@ class Perzyna:
     def __post_init__(self):
         _check_scheme(self.scheme)
         if not self.sigma_y > 0 or math.isnan(self.sigma_y):
-            raise InputError(f"yield stress sigma_y must be > 0, got {self.sigma_y}")
+            raise InputError(f"yield stress sigma_y must be > 0, got {self.sigma_y}",
+                             key="law.sigma_y")
         if not (math.isfinite(self.mu_star) and self.mu_star > 0):
-            raise InputError(f"viscosity mu_star must be finite and > 0, got {self.mu_star}")
+            raise InputError(f"viscosity mu_star must be finite and > 0, got {self.mu_star}",
+                             key="law.mu_star")
 
     @property
     def linear_in_strain(self) -> bool:
@@ -220,7 +226,8 @@ class PlaneStrain:
 
     def __init__(self, law):
         if law.elasticity.model not in ("3d", "3d_standard"):
-            raise InputError(f"plane strain needs a 3-D law, got model {law.elasticity.model!r}")
+            raise InputError(f"plane strain needs a 3-D law, got model {law.elasticity.model!r}",
+                             key="material.plane")
         self.law = law
         self.elasticity = law.elasticity
         self.scheme = law.scheme

@@ -204,11 +204,13 @@ class DisplacementPressure:
         mesh = V.mesh
         if V.ufl_element().degree() != 2:
             raise InputError("the mixed formulation is Taylor–Hood: P2 displacements "
-                             f"(degree = 2), got degree {V.ufl_element().degree()}")
+                             f"(degree = 2), got degree {V.ufl_element().degree()}",
+                             key="discretization.degree")
         if not getattr(law, "isochoric", False):
             raise InputError("the mixed formulation needs a law whose flow keeps the volume "
                              "(elastic, or Perzyna in 3-D or plane strain); this law's mean "
-                             "stress is not K tr ε: use formulation = \"displacement\"")
+                             "stress is not K tr ε: use formulation = \"displacement\"",
+                             key="discretization.formulation")
         el = law.elasticity
         self.u = u
         self.dim = mesh.topology.dim

@@ -109,7 +109,8 @@ def frames(nodes: np.ndarray, normals: np.ndarray, prescribed: np.ndarray) -> Fr
     if np.any(length <= 1e-8 * np.linalg.norm(normals, axis=1)):
         i = int(np.argmax(length <= 1e-8 * np.linalg.norm(normals, axis=1)))
         raise InputError(f"contact node {i}: its normal {normals[i].round(6).tolist()} lies along "
-                         "components prescribed by a Dirichlet part: no normal direction is free")
+                         "components prescribed by a Dirichlet part: no normal direction is free",
+                             key="boundary")
     nu = projected / length[:, None]
     slots = np.argmax(np.where(free, np.abs(nu), -1.0), axis=1)
     signs = np.where(nu[np.arange(n), slots] >= 0.0, 1.0, -1.0)

@@ -25,7 +25,8 @@ NEARLY_INCOMPRESSIBLE_NU = 0.45
 def check_formulation(formulation: str) -> str:
     """``formulation`` if it is one of :data:`FORMULATIONS`, else an InputError."""
     if formulation not in FORMULATIONS:
-        raise InputError(f"formulation must be one of {FORMULATIONS}, got {formulation!r}")
+        raise InputError(f"formulation must be one of {FORMULATIONS}, got {formulation!r}",
+                         key="discretization.formulation")
     return formulation
 
 

@@ -86,14 +86,17 @@ class NormalCompliance:
 
     def __post_init__(self):
         if not (math.isfinite(self.mu) and self.mu > 0):
-            raise InputError(f"normal compliance mu must be finite and > 0, got {self.mu}")
+            raise InputError(f"normal compliance mu must be finite and > 0, got {self.mu}",
+                             key="contact.mu")
         if not 0.0 < self.alpha <= 1.0:
-            raise InputError(f"normal compliance exponent alpha must lie in (0, 1], got {self.alpha}")
+            raise InputError(f"normal compliance exponent alpha must lie in (0, 1], got {self.alpha}",
+                             key="contact.alpha")
         if isinstance(self.gap, (int, float)) and not (math.isfinite(self.gap) and self.gap >= 0):
-            raise InputError(f"gap g must be finite and >= 0, got {self.gap}")
+            raise InputError(f"gap g must be finite and >= 0, got {self.gap}", key="contact.gap")
         floor = self.tangent_floor
         if floor is not None and not (math.isfinite(floor) and floor > 0):
-            raise InputError(f"normal compliance tangent_floor must be finite and > 0, got {floor}")
+            raise InputError(f"normal compliance tangent_floor must be finite and > 0, got {floor}",
+                             key="contact")
 
     def _gap(self, mesh):
         if callable(self.gap) and not isinstance(self.gap, ufl.core.expr.Expr):

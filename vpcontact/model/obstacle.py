@@ -52,13 +52,15 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
     if points.shape[0] == 0:
         return np.zeros(0)
     if not max_distance > 0:
-        raise InputError(f"max_distance must be > 0, got {max_distance}")
+        raise InputError(f"max_distance must be > 0, got {max_distance}",
+                         key="contact.max_distance")
 
     def f(s):
         values = np.asarray(phi((points + s[:, None] * normal).T), dtype=np.float64)
         values = np.broadcast_to(values, s.shape)
         if not np.isfinite(values).all():
-            raise InputError("the obstacle level set evaluated to NaN/Inf near the contact surface")
+            raise InputError("the obstacle level set evaluated to NaN/Inf near the contact surface",
+                             key="contact.obstacle")
         return values
 
     n = points.shape[0]
@@ -83,7 +85,7 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
         i = int(np.argmax(inside))
         x = points[i][:points.shape[1]].tolist()
         raise InputError(f"contact point {x} starts inside the obstacle "
-                         f"(phi = {f_lo[i]:.3g} < 0)")
+                         f"(phi = {f_lo[i]:.3g} < 0)", key="contact.obstacle")
     hi = np.where(f_lo == 0, 0.0, np.nan)
     step = first_step or max_distance / 2.0 ** 20
     s = np.full(n, step)
@@ -105,7 +107,8 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
             raise InputError(f"the ray from contact point {points[i].tolist()} along the normal "
                              f"{normal[i].round(12).tolist()} misses the obstacle within "
                              f"{max_distance:g} (restrict the contact part to where the "
-                             "obstacle lies along the normal, or raise contact.max_distance)")
+                             "obstacle lies along the normal, or raise contact.max_distance)",
+                                 key="contact.obstacle")
         s = np.where(open_, 2.0 * s, s)
 
     # Bisection on [lo, hi] with φ(lo) > 0 ≥ φ(hi): 64 halvings reach machine precision.
@@ -131,7 +134,7 @@ def _check_side(phi: LevelSet, points: np.ndarray, normal: np.ndarray, values: n
         raise InputError(f"the obstacle is on the body's side of its surface: at contact point "
                          f"{points[0].tolist()} phi = {values[0]:.3g} < 0 and phi grows along "
                          "the body's outward normal (a plane obstacle's normal must point "
-                         "towards the body: reverse it)")
+                         "towards the body: reverse it)", key="contact.obstacle")
 
 
 def shape_level_set(shape: str, params: dict, dim: int) -> LevelSet:
@@ -168,7 +171,7 @@ def shape_level_set(shape: str, params: dict, dim: int) -> LevelSet:
     if shape == "ellipsoid":
         s = np.asarray(params["semi_axes"], dtype=np.float64)[:, None]
         return lambda x: s.min() * (np.linalg.norm((coords(x) - c) / s, axis=0) - 1.0)
-    raise InputError(f"unknown obstacle shape {shape!r}")
+    raise InputError(f"unknown obstacle shape {shape!r}", key="contact.obstacle.shape")
 
 
 def rotation_matrix(axis, angle: float) -> np.ndarray:

@@ -61,7 +61,8 @@ class Signorini:
 
     def __post_init__(self):
         if isinstance(self.gap, (int, float)) and not (math.isfinite(self.gap) and self.gap >= 0):
-            raise InputError(f"Signorini gap g must be finite and >= 0, got {self.gap}")
+            raise InputError(f"Signorini gap g must be finite and >= 0, got {self.gap}",
+                             key="contact.gap")
 
     @property
     def moving(self) -> bool:
@@ -138,7 +139,7 @@ def axis_aligned_normal(mesh, facet_tags, tag: int,
 
     area = integral(fem.Constant(mesh, 1.0))
     if area <= 0:
-        raise InputError(f"the contact boundary (tag {tag}) has no facets")
+        raise InputError(f"the contact boundary (tag {tag}) has no facets", key="contact.boundary")
     dim = mesh.geometry.dim
     mean = np.array([integral(n[i]) for i in range(dim)]) / area
     spread = integral(ufl.dot(n - ufl.as_vector(mean.tolist()), n - ufl.as_vector(mean.tolist()))) / area
@@ -194,7 +195,7 @@ def _check_reach(comm, contact: Signorini, cd: ContactDofs) -> None:
         raise InputError(f"no contact node's normal ray meets the obstacle within "
                          f"max_distance = {contact.max_distance:g}: it is not in front of the "
                          "contact part (check the obstacle's place, or raise "
-                         "contact.max_distance if it is farther)")
+                         "contact.max_distance if it is farther)", key="contact.obstacle")
 
 
 def _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time) -> ContactDofs:
@@ -241,10 +242,12 @@ def contact_gap(contact: Signorini, cd: ContactDofs, time: float = 0.0) -> np.nd
     bad = np.flatnonzero(~np.isfinite(gap) | ((gap < 0) & (not contact.moving or time == 0.0)))
     if len(bad) and contact.obstacle is not None:
         raise InputError(f"contact point {points[bad[0]].round(12).tolist()} starts inside the "
-                         f"obstacle at t = {time:g} (gap {gap[bad[0]]:.6g})")
+                         f"obstacle at t = {time:g} (gap {gap[bad[0]]:.6g})",
+                             key="contact.obstacle")
     if len(bad):
         raise InputError(f"the Signorini gap must be finite and >= 0 at every contact point; it is "
-                         f"{gap[bad[0]]:.6g} at {points[bad[0]].round(12).tolist()}")
+                         f"{gap[bad[0]]:.6g} at {points[bad[0]].round(12).tolist()}",
+                             key="contact.gap")
     return gap
 
 

@@ -82,8 +82,8 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
         known = err.option is not None and err.option in scene.solver.petsc_options
         raise scene.error("solver.petsc_options" + (f".{err.option}" if known else ""),
                           str(err)) from None
-    except InputError as err:
-        raise scene.error(_blame(scene, str(err)), str(err)) from None
+    except InputError as err:  # located at the key its raiser named (the mesh if none)
+        raise scene.error(err.key or "mesh", str(err)) from None
     _check_contact_output(scene, mesh, facet_tags, contact_tag)
     _initial_state(scene, problem)
     return Model(scene, problem, facet_tags, part_tags, contact_tag)
@@ -359,14 +359,3 @@ def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
         if not np.isfinite(problem.state.stress.x.array).all():
             raise scene.error("initial.sigma0", "sigma0 is not finite at some quadrature point")
 
-
-def _blame(scene: Scene, message: str) -> str:
-    """The scene key an InputError from the problem set-up is most likely about."""
-    for key, path in (("time scheme", "time.scheme"), ("clamped", "boundary"),
-                      ("Dirichlet", "boundary"), ("obstacle", "contact.obstacle"),
-                      ("gap", "contact.gap"), ("contact", "contact"),
-                      ("point load", "loads.point"), ("Poisson", "material.nu"),
-                      ("Young", "material.E")):
-        if key in message:
-            return path
-    return "mesh"

@@ -96,10 +96,11 @@ class DirichletParts:
         for part in self.parts:
             if len(part.values) != dim:
                 raise InputError(f"Dirichlet part '{part.name}': {len(part.values)} values for "
-                                 f"{dim} displacement components")
+                                 f"{dim} displacement components", key=f"boundary.{part.name}")
             facets = facet_tags.find(part.tag)
             if mesh.comm.allreduce(len(facets), op=MPI.SUM) == 0:
-                raise InputError(f"the Dirichlet part '{part.name}' (tag {part.tag}) has no facets")
+                raise InputError(f"the Dirichlet part '{part.name}' (tag {part.tag}) has no facets",
+                                 key=f"boundary.{part.name}")
             taken = (np.concatenate(self.part_dofs) if self.part_dofs
                      else np.zeros(0, np.int32))
             blocks = fem.locate_dofs_topological(V, fdim, facets)
@@ -185,7 +186,7 @@ class DirichletParts:
             "the Dirichlet parts do not hold the body: the rigid motion(s) "
             + "; ".join(described) + " remain free (the contact condition alone does not remove "
             "them). Clamp a part (kind = \"clamped\"), prescribe more displacement components or "
-            "add symmetry planes")
+            "add symmetry planes", key="boundary")
 
 
 def _rigid_modes(dim: int):

@@ -49,7 +49,8 @@ class PointDofs:
         owned = blocks[blocks < V.dofmap.index_map.size_local]
         found = mesh.comm.allreduce(len(owned), op=MPI.SUM)
         if found == 0:
-            raise InputError(f"point load at {list(load.at)} is not at a mesh vertex (tolerance {tol:.3g})")
+            raise InputError(f"point load at {list(load.at)} is not at a mesh vertex (tolerance {tol:.3g})",
+                             key="loads.point")
         # A vertex shared by ranks is owned by one of them: exactly one rank applies the load.
         bs = V.dofmap.index_map_bs
         self.dofs = (owned[:1, None] * bs + np.arange(bs)[None, :]).ravel().astype(np.int32)
@@ -61,7 +62,8 @@ class PointDofs:
             return np.zeros(0)
         f = np.asarray(self.force(t), dtype=np.float64).reshape(-1)
         if f.shape != (self.dim,):
-            raise InputError(f"point load force must have {self.dim} components, got {f.shape[0]}")
+            raise InputError(f"point load force must have {self.dim} components, got {f.shape[0]}",
+                             key="loads.point")
         return f
 
 
@@ -86,6 +88,7 @@ def tag_facets(mesh, markers: Dict[int, Callable[[np.ndarray], np.ndarray]]):
     shared = set(values[np.isin(indices, unique[counts > 1])].tolist())
     shared = sorted(set().union(*mesh.comm.allgather(shared)))  # raise on all ranks together
     if shared:
-        raise InputError(f"boundary parts {shared} overlap: a facet may belong to one part only")
+        raise InputError(f"boundary parts {shared} overlap: a facet may belong to one part only",
+                         key="boundary")
     order = np.argsort(indices)
     return dmesh.meshtags(mesh, fdim, indices[order].astype(np.int32), values[order])

@@ -103,7 +103,8 @@ class QuasistaticProblem:
                  rotate_contact: Optional[bool] = None, formulation: Optional[str] = None,
                  linear: str = "auto"):
         if predictor not in ("linear", "none"):
-            raise InputError(f"predictor must be 'linear' or 'none', got {predictor!r}")
+            raise InputError(f"predictor must be 'linear' or 'none', got {predictor!r}",
+                             key="solver.predictor")
         if unstable_steps not in ("error", "warn"):
             raise InputError(f"unstable_steps must be 'error' or 'warn', got {unstable_steps!r}")
         self.unstable_steps = unstable_steps
@@ -123,7 +124,7 @@ class QuasistaticProblem:
         el = getattr(law, "elasticity", None)
         if not mixed and el is not None and el.incompressible:
             raise InputError("Poisson's ratio nu = 0.5 (incompressible) needs the mixed "
-                             "formulation (formulation = \"mixed\")")
+                             "formulation (formulation = \"mixed\")", key="material.nu")
         self.V = fem.VectorFunctionSpace(mesh, ("Lagrange", degree), dim=dim)
         self.u = fem.Function(self.V, name="displacement")
         self.time = fem.Constant(mesh, 0.0)
@@ -135,11 +136,12 @@ class QuasistaticProblem:
             clamped = facet_tags.find(clamped_tag)
             if mesh.comm.allreduce(len(clamped), op=MPI.SUM) == 0:
                 raise InputError(f"the clamped boundary (tag {clamped_tag}) has no facets: "
-                                 "meas(Γ1) > 0 is required")
+                                 "meas(Γ1) > 0 is required", key="boundary")
             parts.insert(0, Dirichlet.clamped(clamped_tag, dim))
         if not parts:
             raise InputError("no Dirichlet part: meas(Γ1) > 0 is required (a clamped part, or "
-                             "prescribed displacements and symmetry planes that hold the body)")
+                             "prescribed displacements and symmetry planes that hold the body)",
+                                 key="boundary")
         self.dirichlet = DirichletParts(self.V, facet_tags, parts)
         if not any(p.all_zero for p in parts):
             self.dirichlet.check_rigid_motions()
@@ -232,7 +234,8 @@ class QuasistaticProblem:
         coords = self.state.point_coordinates().T
         values = np.asarray(sigma0(coords), dtype=np.float64).reshape(self.state.num_points, -1)
         if values.shape[1] != self.state.size:
-            raise InputError(f"initial stress must have {self.state.size} Mandel components")
+            raise InputError(f"initial stress must have {self.state.size} Mandel components",
+                             key="initial.sigma0")
         self.state.set_stress(values)
 
     def _tangent_out(self, key) -> Optional[np.ndarray]:
@@ -264,7 +267,7 @@ class QuasistaticProblem:
         it is checked at order 1 when possible, else accepted unchecked.
         """
         if not dt > 0:
-            raise InputError(f"time step must be > 0, got {dt}")
+            raise InputError(f"time step must be > 0, got {dt}", key="time.k")
         self._check_stability(dt)
         t_new = float(self.time.value) + dt
         n = self.step_index + 1
@@ -363,7 +366,7 @@ class QuasistaticProblem:
         message = (f"time step {dt:.4g} exceeds the stability limit {limit:.4g} of the explicit "
                    f"scheme (2/L from the law's data); use the implicit scheme or k <= {limit:.4g}")
         if self.unstable_steps == "error":
-            raise InputError(message)
+            raise InputError(message, key="time.k")
         if not getattr(self, "_warned_unstable", False):
             warnings.warn(message, RuntimeWarning, stacklevel=3)
             self._warned_unstable = True
