@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import math
 import numbers
 
 import numpy as np
@@ -10,6 +11,20 @@ import numpy.typing as npt
 
 from vpcontact import _cpp
 from vpcontact.kernels._checks import _DIMENSION, _check_model, _mandel, _real_array, _tensors
+
+
+#: The Mandel convention, owned here: a symmetric tensor's shear components enter its Mandel
+#: vector multiplied by √2 (so that m(a)·m(b) = a:b), in the order 23, 13, 12 (3-D) after the
+#: normal ones. The C++ kernels, the UFL forms (:mod:`vpcontact.model.tensors`) and the scene's
+#: Voigt input use these.
+SHEAR_FACTOR = math.sqrt(2.0)
+OFF_DIAGONAL = {1: [], 2: [(0, 1)], 3: [(1, 2), (0, 2), (0, 1)]}
+
+
+def voigt_to_mandel_factors(d: int) -> list:
+    """Factors turning Voigt stresses (s11 | s11 s22 s12 | s11 s22 s33 s23 s13 s12) into Mandel
+    components."""
+    return [1.0] * d + [SHEAR_FACTOR] * len(OFF_DIAGONAL[d])
 
 
 def dimension(model: str) -> int:

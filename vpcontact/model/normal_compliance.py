@@ -56,6 +56,7 @@ import math
 from dataclasses import dataclass
 from typing import Optional
 
+import numpy as np
 import ufl
 
 from vpcontact.errors import InputError
@@ -107,10 +108,17 @@ class NormalCompliance:
         """p = u_ν - g, positive where the body penetrates the foundation."""
         return ufl.dot(u, normal) - self._gap(u.ufl_domain())
 
+    def _law(self, pos):
+        """(1/μ) pos^α: the one place the compliance law is written (UFL or numpy)."""
+        return (1.0 / self.mu) * (pos if self.alpha == 1.0 else pos ** self.alpha)
+
     def pressure(self, u, normal):
         """Contact pressure -σ_ν = (1/μ) p_+^α ≥ 0 (UFL expression on Γ3)."""
-        pos = ufl.max_value(self.penetration(u, normal), 0.0)
-        return (1.0 / self.mu) * (pos if self.alpha == 1.0 else pos ** self.alpha)
+        return self._law(ufl.max_value(self.penetration(u, normal), 0.0))
+
+    def normal_stress(self, penetration: np.ndarray) -> np.ndarray:
+        """σ_ν = −(1/μ) p_+^α at nodes with penetration p = u_ν − g (numpy, for outputs)."""
+        return -self._law(np.maximum(np.asarray(penetration, dtype=np.float64), 0.0))
 
     def residual(self, u, v, normal, ds):
         """∫_Γ3 (1/μ)(u_ν - g)_+^α v_ν da (exact for every α)."""

@@ -13,12 +13,10 @@ same layout, which lets quadrature-point stresses and tangents enter UFL forms d
 
 from __future__ import annotations
 
-import math
-
 import ufl
 
-_SQRT2 = math.sqrt(2.0)
-_OFF_DIAGONAL = {2: [(0, 1)], 3: [(1, 2), (0, 2), (0, 1)]}
+from vpcontact.kernels.mandel import OFF_DIAGONAL as _OFF_DIAGONAL
+from vpcontact.kernels.mandel import SHEAR_FACTOR as _SQRT2
 
 
 def mandel_size(dim: int) -> int:

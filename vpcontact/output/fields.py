@@ -16,20 +16,12 @@ import ufl
 from dolfinx import fem, io
 from dolfinx import mesh as dmesh
 
+from vpcontact.kernels.mandel import from_mandel
 from vpcontact.model.quadrature import QuadratureState
 
-_SQRT2 = np.sqrt(2.0)
-
-
 def mandel_to_full(m: np.ndarray, dim: int) -> np.ndarray:
-    """(N, n) Mandel vectors -> (N, dim, dim) tensors (numpy)."""
-    out = np.empty((m.shape[0], dim, dim))
-    for i in range(dim):
-        out[:, i, i] = m[:, i]
-    pairs = {2: [(0, 1)], 3: [(1, 2), (0, 2), (0, 1)]}.get(dim, [])
-    for k, (i, j) in enumerate(pairs):
-        out[:, i, j] = out[:, j, i] = m[:, dim + k] / _SQRT2
-    return out
+    """(N, n) Mandel vectors -> (N, dim, dim) tensors (numpy; the kernels' convention)."""
+    return from_mandel(m, dim)
 
 
 def von_mises(m: np.ndarray, dim: int, s33: np.ndarray | None = None) -> np.ndarray:

@@ -166,8 +166,7 @@ class Session:
                              exclude=problem.dirichlet.prescribed)
 
         def pressure(u):
-            penetration = np.maximum(cdofs.normal_displacement(u) - cdofs.gap, 0.0)
-            return -(penetration ** law.alpha) / law.mu
+            return law.normal_stress(cdofs.normal_displacement(u) - cdofs.gap)
 
         return ContactHistory(problem, cdofs, pressure)
 

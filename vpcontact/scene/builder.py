@@ -11,7 +11,6 @@ the vertices) are reported with their place in the scene file.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from typing import Dict, Optional
 
@@ -25,6 +24,7 @@ from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.errors import InputError, SolverOptionError
 from vpcontact.solver.loads import Loads, PointLoad
 from vpcontact.solver.problem import QuasistaticProblem
+from vpcontact.kernels.mandel import voigt_to_mandel_factors
 from vpcontact.scene.files import Scene
 from vpcontact.scene.finite import check_finite
 from vpcontact.scene.gmsh_files import gmsh_session
@@ -346,9 +346,7 @@ def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
         st.view(st.strain_old)[:] = st.strain_at_points()
     if not _is_zero(init.sigma0):
         exprs = init.sigma0
-        # s11 | s11 s22 s12 | s11 s22 s33 s23 s13 s12 -> Mandel: shear components × √2
-        factors = {1: [1.0], 2: [1.0, 1.0, math.sqrt(2.0)],
-                   3: [1.0, 1.0, 1.0] + [math.sqrt(2.0)] * 3}[dim]
+        factors = voigt_to_mandel_factors(dim)  # s11 | s11 s22 s12 | s11 s22 s33 s23 s13 s12
 
         def sigma0(points):
             n = points.shape[1]
