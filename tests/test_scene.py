@@ -168,7 +168,7 @@ def test_signorini_2d_data():
 def test_signorini_3d_data():
     scene = load(resolve("signorini_3d"))
     assert scene.dim == 3 and scene.mesh.upper == (3.0, 1.0, 1.0)
-    assert scene.mesh.cells == (24, 8, 8) and scene.mesh.cell_type == "tetrahedron"
+    assert scene.mesh.cells == (12, 4, 4) and scene.mesh.cell_type == "tetrahedron"
     end = scene.boundaries["end"]
     assert end.kind == "traction" and end.plane.axis == 0 and end.plane.value == 3.0
     assert end.traction[2].numpy(np.zeros((3, 1)), 1.0)[0] == -10.0
@@ -203,7 +203,7 @@ def test_normal_compliance_2d_data():
 def test_normal_compliance_3d_data():
     scene = load(resolve("normal_compliance_3d"))
     assert scene.contact.type == "normal_compliance" and scene.contact.mu == 1e-6
-    assert scene.mesh.cells == (24, 8, 8) and scene.time.k == 0.05
+    assert scene.mesh.cells == (12, 4, 4) and scene.time.k == 0.05
 
 
 # -- defaults ---------------------------------------------------------------------------------
