@@ -60,8 +60,9 @@ def run(out: str | Path = "output/signorini_2d", n: int | None = None, dt: float
     n = n or (12 if ci else 32)
     dt = dt or (0.1 if ci else 0.02)
     problem = paper.signorini_2d(n, scheme=scheme, degree=degree)
-    record, history, cells = runner.run(problem, t_final, dt, out=Path(out), name="signorini_2d",
-                                        xdmf=xdmf)
+    record, history, cells = runner.run(problem, t_final, dt, out=Path(out),
+                                        options=runner.RunOptions(name="signorini_2d",
+                                                                  xdmf=xdmf))
     plots.deformed_configuration(Path(out) / "fig1_deformed.png", problem.u, cells.von_mises,
                                  "2-D Signorini problem: von Mises norm at t = T")
     plots.contact_evolution(Path(out) / "fig2_contact_evolution.png", history, axis=0,

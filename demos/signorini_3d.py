@@ -58,8 +58,9 @@ def run(out: str | Path = "output/signorini_3d", n: int | None = None, dt: float
     degree = 2 if formulation == "mixed" else 1
     problem = paper.signorini_3d(3 * n, n, n, scheme=scheme, model=model, degree=degree,
                                  formulation=formulation)
-    record, history, cells = runner.run(problem, paper.T_FINAL, dt, out=Path(out), name="signorini_3d",
-                                        xdmf=xdmf)
+    record, history, cells = runner.run(problem, paper.T_FINAL, dt, out=Path(out),
+                                        options=runner.RunOptions(name="signorini_3d",
+                                                                  xdmf=xdmf))
     plots.deformed_configuration(Path(out) / "fig3_deformed.png", problem.u, cells.von_mises,
                                  "3-D Signorini problem: von Mises norm at t = T")
     plots.contact_evolution(Path(out) / "fig4_contact_evolution.png", history, axis=0, line=(1, 0.5),

@@ -23,7 +23,8 @@ _SCRIPT = textwrap.dedent("""
     from vpcontact.paper import signorini as paper
     from vpcontact.output import runner
     problem = paper.signorini_3d(9, 3, 3)
-    record, _, _ = runner.run(problem, 1.0, 0.25, out=sys.argv[1], xdmf=False, verbose=False)
+    record, _, _ = runner.run(problem, 1.0, 0.25, out=sys.argv[1],
+                               options=runner.RunOptions(xdmf=False, verbose=False))
     if problem.mesh.comm.rank == 0:
         print("ITERATIONS", *record.newton_iterations)
 """)
@@ -54,8 +55,8 @@ def test_two_ranks_reproduce_the_serial_contact_history(tmp_path):
     parallel_its = [int(v) for v in stdout.split("ITERATIONS")[1].split()]
 
     serial_out = tmp_path / "serial"
-    record, _, _ = runner.run(paper.signorini_3d(9, 3, 3), 1.0, 0.25, out=serial_out, xdmf=False,
-                              verbose=False)
+    record, _, _ = runner.run(paper.signorini_3d(9, 3, 3), 1.0, 0.25, out=serial_out,
+                              options=runner.RunOptions(xdmf=False, verbose=False))
     serial = _history(serial_out / "contact_history.csv")
     parallel = _history(parallel_out / "contact_history.csv")
 

@@ -123,7 +123,7 @@ def test_run_wall_time_covers_its_outputs(shared_tmp_path, monkeypatch):
 
     monkeypatch.setattr(runner.ContactHistory, "write_csv", slow_write_csv)
     record, history, _ = runner.run(paper.signorini_2d(4), 0.04, 0.02, out=shared_tmp_path,
-                                    verbose=False)
+                                    options=runner.RunOptions(verbose=False))
     assert record.completed and history is not None
     assert (shared_tmp_path / "contact_history.csv").exists()
     assert 1.0 <= record.output_time <= record.wall_time

@@ -15,8 +15,8 @@ Takes a problem (and for :class:`Session` a built scene); gives files in an outp
 
 from vpcontact.output import plots, runner
 from vpcontact.output.fields import CellStress, ContactHistory, XdmfSeries, von_mises
-from vpcontact.output.runner import RunRecord, summary_text, run
+from vpcontact.output.runner import RunOptions, RunParts, RunRecord, summary_text, run
 from vpcontact.output.session import Session
 
 __all__ = ["CellStress", "ContactHistory", "RunRecord", "Session", "XdmfSeries", "plots",
-           "summary_text", "run", "runner", "von_mises"]
+           "summary_text", "run", "RunOptions", "RunParts", "runner", "von_mises"]

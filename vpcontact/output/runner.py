@@ -54,36 +54,73 @@ def _timed(record: RunRecord, out: Optional[Path] = None):
         record.output_time += _time.perf_counter() - start
 
 
+@dataclass(frozen=True)
+class RunOptions:
+    """How a run steps and what it writes (a scene's [time] and [output] choices).
+
+    Attributes:
+        name: stem of the XDMF file.
+        xdmf: write the XDMF series, every ``xdmf_every``-th step and the last one.
+        csv_name: file of the contact history (None: not written).
+        verbose: a log line (INFO) per step.
+        max_cuts: step halvings allowed in a row when a step fails.
+        tolerance: relative local time-error tolerance of adaptive steps (None: fixed steps).
+    """
+
+    name: str = "result"
+    xdmf: bool = True
+    xdmf_every: int = 1
+    csv_name: Optional[str] = "contact_history.csv"
+    verbose: bool = True
+    max_cuts: int = 12
+    tolerance: Optional[float] = None
+
+
+@dataclass
+class RunParts:
+    """What a run records into and answers to, besides the problem.
+
+    Attributes:
+        history: records the contact nodes (default: a Signorini problem's).
+        forces: records the support reactions and the contact force (``reactions.csv``).
+        xdmf_extra: (Function, refresh) pairs written besides u, stress and von Mises norm.
+        progress: ``progress(step, report)`` after every accepted step, on every rank.
+        stop: a :class:`~vpcontact.output.interrupt.StopRequest`, asked after every step.
+        checkpoints: writes checkpoints; ``restart`` continues a run from one (the problem has
+            been restored already; outputs are appended).
+        record: filled in place (so that a caller keeps it when the run fails).
+    """
+
+    history: Optional[ContactHistory] = None
+    forces: Optional[ForceHistory] = None
+    xdmf_extra: tuple = ()
+    progress: Optional[object] = None
+    stop: Optional[object] = None
+    checkpoints: Optional[Checkpointer] = None
+    restart: Optional[Restart] = None
+    record: Optional[RunRecord] = None
+
+
 def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Path] = None,
-        name: str = "result", xdmf: bool = True, verbose: bool = True,
-        max_cuts: int = 12, history: Optional[ContactHistory] = None,
-        tolerance: Optional[float] = None,
-        csv_name: Optional[str] = "contact_history.csv", progress=None, xdmf_every: int = 1,
-        xdmf_extra=(), forces: Optional[ForceHistory] = None, stop=None,
-        checkpoints: Optional[Checkpointer] = None, restart: Optional[Restart] = None,
-        record: Optional[RunRecord] = None
+        options: RunOptions = RunOptions(), parts: Optional[RunParts] = None
         ) -> tuple[RunRecord, Optional[ContactHistory], CellStress]:
     """Advance ``problem`` to ``t_final`` with steps of at most ``dt``, writing outputs into ``out``.
 
     A step that does not converge is rejected and retried with half the step, at most
-    ``max_cuts`` times in a row; with ``tolerance`` k also follows a local time-error estimate
-    (see :mod:`vpcontact.solver.stepping`). If it still fails, the outputs of the accepted
-    steps are written, ``record.completed`` stays False and the error is re-raised.
-
-    ``history`` records the contact nodes (default: a Signorini problem's), written to ``csv_name``
-    (None: not written); ``progress(step, report)`` is called after every accepted step on every
-    rank; the XDMF series gets every ``xdmf_every``-th step and the last one, with the fields
-    ``xdmf_extra`` ((Function, refresh) pairs) besides u, stress and von Mises norm. ``forces``
-    records the support reactions and the contact force at every step (``reactions.csv``). ``stop``
-    (a :class:`~vpcontact.output.interrupt.StopRequest`) is asked after every step; when a signal
-    came, the outputs are closed, a checkpoint is written and :class:`Interrupted` is raised.
-    ``checkpoints`` writes checkpoints; ``restart`` continues a run from one (the problem has been
-    restored already; outputs are appended). ``record``: filled in place (so that a caller keeps it
-    when the run fails).
+    ``options.max_cuts`` times in a row; with ``options.tolerance`` k also follows a local
+    time-error estimate (see :mod:`vpcontact.solver.stepping`). If it still fails, the outputs
+    of the accepted steps are written, ``record.completed`` stays False and the error is
+    re-raised. When ``parts.stop`` reports a signal, the outputs are closed, a checkpoint is
+    written and :class:`Interrupted` is raised.
 
     Returns the run record, the contact history (Signorini problems) and the cell stress fields.
     """
-    control = StepControl(dt, max_cuts=max_cuts, tolerance=tolerance)
+    parts = parts if parts is not None else RunParts()
+    history, forces, stop, checkpoints = parts.history, parts.forces, parts.stop, parts.checkpoints
+    restart, progress = parts.restart, parts.progress
+    name, xdmf, xdmf_every, verbose = options.name, options.xdmf, options.xdmf_every, options.verbose
+    csv_name, xdmf_extra, record = options.csv_name, parts.xdmf_extra, parts.record
+    control = StepControl(dt, max_cuts=options.max_cuts, tolerance=options.tolerance)
     if restart is not None:
         restore_control(control, restart)
     comm = problem.mesh.comm

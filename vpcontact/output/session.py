@@ -90,14 +90,16 @@ class Session:
         record = runner.RunRecord()
         error: Optional[Exception] = None
         try:
-            _, history, cells = runner.run(
-                problem, scene.time.T, scene.time.k, out=self.out, name=scene.name,
-                xdmf=scene.output.xdmf, verbose=False, max_cuts=scene.time.max_cuts,
-                tolerance=scene.time.tolerance,
-                history=history, csv_name="contact.csv" if scene.output.contact_csv else None, progress=self._progress,
-                xdmf_every=scene.output.every, xdmf_extra=self._pressure_field(history),
-                forces=self.forces, stop=self.stop, checkpoints=checkpoints,
-                restart=self.restart, record=record)
+            options = runner.RunOptions(
+                name=scene.name, xdmf=scene.output.xdmf, xdmf_every=scene.output.every,
+                csv_name="contact.csv" if scene.output.contact_csv else None, verbose=False,
+                max_cuts=scene.time.max_cuts, tolerance=scene.time.tolerance)
+            parts = runner.RunParts(
+                history=history, forces=self.forces,
+                xdmf_extra=tuple(self._pressure_field(history)), progress=self._progress,
+                stop=self.stop, checkpoints=checkpoints, restart=self.restart, record=record)
+            _, history, cells = runner.run(problem, scene.time.T, scene.time.k, out=self.out,
+                                           options=options, parts=parts)
         except Exception as err:  # re-raised below once the summary is on disk
             error = _located(scene, err)
         wall = time.perf_counter() - start
