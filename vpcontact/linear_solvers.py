@@ -12,9 +12,10 @@ LINEAR_SOLVERS = ("auto", "direct", "iterative")
 
 #: Unknowns from which ``auto`` picks the iterative solver, by formulation (see the README's
 #: "Linear solvers"). Displacements: 10⁵, as before the mixed formulation existed (GAMG works
-#: where the tangent is not nearly incompressible). Mixed: MUMPS is faster inside the time loop at every
-#: size measured (6.8× at 6 400 unknowns), so ``auto`` switches where its memory would approach
-#: this machine's 24 GB (2.7 GB of factors at 143 k unknowns, growing about like n^(4/3)).
+#: where the tangent is not nearly incompressible). Mixed: MUMPS is faster inside the time loop
+#: at every size measured (6.8× at 6 400 unknowns), so ``auto`` switches where its memory would
+#: approach this machine's 24 GB (2.7 GB of factors at 143 k unknowns, growing about like
+#: n^(4/3)).
 ITERATIVE_FROM = {"displacement": 100_000, "mixed": 300_000}
 
 

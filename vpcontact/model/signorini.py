@@ -163,10 +163,17 @@ def contact_dofs(V: fem.FunctionSpace, facet_tags, contact: Signorini,
     an axis-aligned planar Γ3 and local frames otherwise; True forces local frames (identity
     blocks on an axis-aligned Γ3: one path tested against the other).
     """
-    mesh = V.mesh
-    aligned = axis_aligned_normal(mesh, facet_tags, contact.tag)
+    aligned = axis_aligned_normal(V.mesh, facet_tags, contact.tag)
     if aligned is not None and not rotate:
-        return _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time)
+        cd = _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time)
+    else:
+        cd = _framed_contact_dofs(V, facet_tags, contact, exclude, time)
+    _check_reach(V.mesh.comm, contact, cd)
+    return cd
+
+
+def _framed_contact_dofs(V, facet_tags, contact, exclude, time) -> ContactDofs:
+    mesh = V.mesh
     bs = V.dofmap.index_map_bs
     facets = facet_tags.find(contact.tag)
     weighted = vertex_normals(V, facet_tags, contact.tag)
@@ -182,7 +189,6 @@ def contact_dofs(V: fem.FunctionSpace, facet_tags, contact: Signorini,
     dofs = (nodes * bs + fr.slots).astype(np.int32)
     cd = ContactDofs(None, 1.0, dofs, points, np.zeros(len(nodes)), nodes, fr.normals, fr.signs, fr)
     cd.gap = contact_gap(contact, cd, time)
-    _check_reach(mesh.comm, contact, cd)
     return cd
 
 
@@ -214,7 +220,6 @@ def _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time) -> Con
     cd = ContactDofs(axis, sign, parent, points, np.zeros(len(parent)),
                      (parent // bs).astype(np.int32), normals, np.full(len(parent), sign))
     cd.gap = contact_gap(contact, cd, time)
-    _check_reach(V.mesh.comm, contact, cd)
     return cd
 
 

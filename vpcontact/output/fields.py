@@ -19,14 +19,9 @@ from dolfinx import mesh as dmesh
 from vpcontact.kernels.mandel import from_mandel
 from vpcontact.model.quadrature import QuadratureState
 
-def mandel_to_full(m: np.ndarray, dim: int) -> np.ndarray:
-    """(N, n) Mandel vectors -> (N, dim, dim) tensors (numpy; the kernels' convention)."""
-    return from_mandel(m, dim)
-
-
 def von_mises(m: np.ndarray, dim: int, s33: np.ndarray | None = None) -> np.ndarray:
     """√(3/2 s:s) of Mandel stresses (2-D: σ33 = ``s33``, zero in plane stress; 1-D: |σ|)."""
-    t = mandel_to_full(m, dim)
+    t = from_mandel(m, dim)
     full = np.zeros((m.shape[0], 3, 3))
     full[:, :dim, :dim] = t
     if s33 is not None:
@@ -69,7 +64,7 @@ class CellStress:
             values[..., :dim] += added[..., None]
         mean = np.einsum("q,cqn->cn", self._weights, values)
         self.stress.x.array.reshape(-1, dim * dim)[self._dg_dofs] = \
-            mandel_to_full(mean, dim).reshape(-1, dim * dim)
+            from_mandel(mean, dim).reshape(-1, dim * dim)
         s33 = None
         if self._out_of_plane is not None and len(self._out_of_plane()) == st.num_points:
             s33_points = self._out_of_plane()[self._q_dofs]

@@ -105,9 +105,9 @@ class Session:
         wall = time.perf_counter() - start
         if record is not None and record.interrupted and error is None:
             error = Interrupted(record.interrupted, record.times[-1] if record.times else 0.0)
-        self.warnings = self._contact_warnings(history, record) if error is None else []
+        warnings = self._contact_warnings(history, record) if error is None else []
         try:
-            self._write_summary(record, wall, error)
+            self._write_summary(record, wall, error, warnings)
         except OSError as err:
             if error is None or isinstance(error, Interrupted):
                 error = OutputError(f"cannot write {self.out / 'summary.json'}: {err}")
@@ -118,7 +118,7 @@ class Session:
         self.comm.barrier()  # rank 0 has written every file
         return SessionResult(scene.name, record.times[-1], len(record.times),
                              sum(record.newton_iterations), len(record.cuts), wall,
-                             self.comm.size, self.out.resolve(), tuple(self.warnings))
+                             self.comm.size, self.out.resolve(), tuple(warnings))
 
     def _contact_warnings(self, history: Optional[ContactHistory], record) -> list:
         """A contact part that never touched during the run (an obstacle that moved away, or
@@ -218,7 +218,8 @@ class Session:
                                     title=f"{scene.name}: normal displacement of the contact nodes",
                                     line=line, obstacle=scene.contact.type == "signorini")
 
-    def _write_summary(self, record, wall: float, error: Optional[Exception]) -> None:
+    def _write_summary(self, record, wall: float, error: Optional[Exception],
+                       warnings: list) -> None:
         scene, problem = self.model.scene, self.model.problem
         solver = problem.solver
         summary = {
@@ -246,7 +247,7 @@ class Session:
             "kernel_calls": solver.kernel_calls,
             "vi_solves": solver.vi_solves,
             "vi_linear_solves": None if solver.lagged_lu is None else solver.lagged_lu.counters(),
-            "warnings": getattr(self, "warnings", []),
+            "warnings": warnings,
         }
         def write():
             self.out.mkdir(parents=True, exist_ok=True)

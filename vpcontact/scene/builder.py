@@ -146,7 +146,7 @@ def _read_gmsh(scene: Scene, comm):
                                   if dims else ""))
             except Exception as err:  # gmsh raises plain Exceptions for unreadable files
                 problem = f"cannot read the Gmsh file: {err}"
-        problem, key = comm.bcast((problem, key if gmsh is not None else None), root=0)
+        problem, key = comm.bcast((problem, key), root=0)
         if problem is not None:
             raise scene.error(key, problem)
         mesh, _, facet_tags = gmshio.model_to_mesh(gmsh.model if gmsh is not None else None,
