@@ -375,7 +375,8 @@ def test_contact_naming_a_missing_or_wrong_part():
     text = edit(BASE, 'boundary = "bottom"', 'boundary = "top"')
     problems(text, r"contact\.boundary: boundary part 'top' has kind 'clamped', not 'contact'")
     text = BASE + '\n[boundary.other]\nkind = "contact"\nwhere = "x[0] < 0"\n'
-    problems(text, r"boundary\.other\.kind: only one contact part is supported")
+    problems(text, r"boundary\.other\.kind: boundary part 'other' has kind 'contact' but no "
+                   r"contact table names it")
 
 
 def test_gmsh_problems(tmp_path):

@@ -366,7 +366,8 @@ def test_p2_normal_compliance_on_a_curved_face_validates_as_it_runs(shared_tmp_p
         err = capsys.readouterr().err
         if MPI.COMM_WORLD.rank == 0:
             assert re.search(r"p2\.toml:\d+: discretization\.degree: normal compliance with "
-                             r"degree = 2 on a contact face that is not an axis-aligned plane",
+                             r"degree = 2 on a contact face \('contact'\) that is not an "
+                             r"axis-aligned plane",
                              err), err
     assert not (shared_tmp_path / "out").exists()
     quiet = write_shared(shared_tmp_path / "p2_quiet.toml",

@@ -188,8 +188,18 @@ def _validate(args, comm) -> int:
     model.problem.solver.destroy()
     if comm.rank == 0:
         print(f"{scene.path}: valid ({scene.dim}-D, {len(scene.boundaries)} boundary parts, "
-              f"law {scene.law.type}, contact {scene.contact.type if scene.contact else 'none'})")
+              f"law {scene.law.type}, contact {_contact_summary(scene)})")
     return 0
+
+
+def _contact_summary(scene) -> str:
+    """``none``, ``signorini`` or, with several parts, ``signorini on 'top', normal_compliance
+    on 'bottom'``."""
+    if not scene.contacts:
+        return "none"
+    if len(scene.contacts) == 1:
+        return scene.contacts[0].type
+    return ", ".join(f"{c.type} on {c.boundary!r}" for c in scene.contacts)
 
 
 def _petsc_options(pairs) -> dict:

@@ -19,11 +19,14 @@ class InputError(VpcontactError, ValueError):
         key: the scene key the problem concerns (e.g. ``"contact.obstacle"``), set by the code
             that found it, so that a scene builder can locate it in the file without reading
             the message; None when no scene key applies.
+        part: the contact part (its boundary part's name) a ``contact.…`` key belongs to, when
+            the scene has several; None otherwise.
     """
 
-    def __init__(self, message: str, key: str | None = None):
+    def __init__(self, message: str, key: str | None = None, part: str | None = None):
         super().__init__(message)
         self.key = key
+        self.part = part
 
 
 class SolverOptionError(InputError):
@@ -40,7 +43,8 @@ class SolverOptionError(InputError):
 
 
 class ObstacleOutOfReach(InputError):
-    """During the run a moving obstacle left the reach of the contact nodes' normal rays."""
+    """During the run a moving obstacle left the reach of the contact nodes' normal rays (its
+    ``part`` names the contact part)."""
 
 
 class ConvergenceError(VpcontactError, RuntimeError):

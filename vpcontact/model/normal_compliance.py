@@ -77,6 +77,10 @@ class NormalCompliance:
             or a function x -> UFL expression called with the spatial coordinate of the mesh.
         tangent_floor: δ > 0 in the Jacobian slope α max(p, δ)^(α-1) for α < 1 (a length);
             None: 1e-12 times the cell diameter. Ignored for α = 1.
+        surface: the foundation's surface as a :class:`~vpcontact.model.signorini.Signorini`
+            condition on the same facets (its obstacle, or its gap as a function of points),
+            from which the nodes of Γ3 get their normals and gaps for the outputs; None: a
+            constant ``gap``.
     """
 
     tag: int
@@ -84,6 +88,7 @@ class NormalCompliance:
     alpha: float = 1.0
     gap: object = 0.0
     tangent_floor: Optional[float] = None
+    surface: Optional[object] = None
 
     def __post_init__(self):
         if not (math.isfinite(self.mu) and self.mu > 0):
@@ -98,6 +103,13 @@ class NormalCompliance:
         if floor is not None and not (math.isfinite(floor) and floor > 0):
             raise InputError(f"normal compliance tangent_floor must be finite and > 0, got {floor}",
                              key="contact")
+
+    def part(self, u, facet_tags, equilibrium=None, name: str = "contact",
+             exclude: np.ndarray = np.zeros(0, dtype=np.int32),
+             rotate: Optional[bool] = None) -> "CompliancePart":
+        """This condition on the mesh of ``u``: a :class:`~vpcontact.model.contact.ContactPart`
+        (see :class:`CompliancePart`)."""
+        return CompliancePart(self, u, facet_tags, name, exclude)
 
     def _gap(self, mesh):
         if callable(self.gap) and not isinstance(self.gap, ufl.core.expr.Expr):
@@ -140,3 +152,62 @@ class NormalCompliance:
         """∫_Γ3 (1/μ) k(p) du_ν v_ν da: the derivative of :meth:`residual` where p ∉ (0, δ)."""
         return ((1.0 / self.mu) * self.slope(u, normal) * ufl.dot(du, normal) * ufl.dot(v, normal)
                 * ds(self.tag))
+
+
+class CompliancePart:
+    """A normal-compliance part at run time (a :class:`~vpcontact.model.contact.ContactPart`):
+    the UFL terms, and the nodes of Γ3 with their normals and gaps for the outputs (located on
+    first use, through the foundation's surface: :attr:`NormalCompliance.surface`)."""
+
+    bounded = False
+    moving = False
+
+    def __init__(self, law: NormalCompliance, u, facet_tags, name: str, exclude: np.ndarray):
+        from dolfinx import fem
+        from vpcontact.model.contact import unrolled
+        V = u.function_space
+        self.law, self.name, self.u = law, name, u
+        self._facet_tags, self._exclude = facet_tags, exclude
+        blocks = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, facet_tags.find(law.tag))
+        blocks = blocks[blocks < V.dofmap.index_map.size_local]
+        bs = V.dofmap.index_map_bs
+        self.force_dofs = unrolled(bs, blocks, exclude)
+        self.node_blocks = np.unique(self.force_dofs // bs).astype(np.int32)
+        self._nodes = None
+
+    @property
+    def nodes(self):
+        if self._nodes is None:
+            from vpcontact.model.signorini import Signorini, contact_dofs
+            surface = self.law.surface
+            if surface is None:
+                gap = self.law.gap if isinstance(self.law.gap, (int, float)) else 0.0
+                surface = Signorini(self.law.tag, gap=gap)
+            self._nodes = contact_dofs(self.u.function_space, self._facet_tags, surface,
+                                       exclude=self._exclude)
+        return self._nodes
+
+    def snes_defaults(self, linear_law: bool) -> dict:
+        """SNES options this part needs: for α < 1 with a law linear in ε, a backtracking line
+        search (p ↦ p^α is concave: full steps can overshoot past contact onset and cycle)."""
+        return {"snes_linesearch_type": "bt"} if linear_law and self.law.alpha < 1.0 else {}
+
+    def terms(self, u, du, v, normal, ds):
+        return (self.law.residual(u, v, normal, ds), self.law.jacobian(u, du, v, normal, ds))
+
+    def update(self, time: float) -> None:
+        pass
+
+    def pressure(self) -> np.ndarray:
+        cd = self.nodes
+        return self.law.normal_stress(cd.normal_displacement(self.u) - cd.gap)
+
+    def report(self):
+        return None
+
+    def touching(self, tolerance: float) -> bool:
+        cd = self.nodes
+        return bool(np.any(cd.normal_displacement(self.u) > cd.gap))
+
+    def driving_displacement(self, time: float) -> Optional[float]:
+        return None

@@ -70,6 +70,13 @@ class Signorini:
         return self.obstacle is not None and (self.obstacle_moves or self.translation is not None
                                               or self.rotation is not None)
 
+    def part(self, u: fem.Function, facet_tags, equilibrium, name: str = "contact",
+             exclude: np.ndarray = np.zeros(0, dtype=np.int32),
+             rotate: Optional[bool] = None) -> "SignoriniPart":
+        """This condition on the mesh of ``u``: a :class:`~vpcontact.model.contact.ContactPart`
+        (see :class:`SignoriniPart`)."""
+        return SignoriniPart(self, u, facet_tags, equilibrium, name, exclude, rotate)
+
     def obstacle_at(self, time: float) -> LevelSet:
         """The obstacle's level set at ``time``, as a function of points (3, N)."""
         phi = self.obstacle
@@ -406,3 +413,67 @@ class _VertexPressure:
         share = self._share[self._at]
         return np.where(share > 0, self._pk.x.array[self._at] / np.where(share > 0, share, 1.0),
                         0.0)
+
+
+class SignoriniPart:
+    """A Signorini contact part at run time (a :class:`~vpcontact.model.contact.ContactPart`):
+    its nodes and bounded dofs, the gap of a moving obstacle, the nodal pressure and the report.
+
+    Args:
+        law: the condition.
+        u: the displacement.
+        facet_tags: the mesh's facet tags (Γ3 is ``law.tag``).
+        equilibrium: the UFL form (σ, ε(v)) − (f, v), whose residual gives the pressure.
+        name: the boundary part's name.
+        exclude: dofs held elsewhere (Dirichlet dofs, the nodes of earlier contact parts).
+        rotate: see :func:`contact_dofs`.
+    """
+
+    bounded = True
+
+    def __init__(self, law: Signorini, u: fem.Function, facet_tags, equilibrium, name: str,
+                 exclude: np.ndarray, rotate: Optional[bool]):
+        from vpcontact.model.contact import unrolled
+        V = u.function_space
+        self.law, self.name, self.u = law, name, u
+        self.comm = V.mesh.comm
+        self._nodes = contact_dofs(V, facet_tags, law, exclude=exclude, rotate=rotate)
+        self.node_blocks = np.unique(self._nodes.nodes).astype(np.int32)
+        self.force_dofs = unrolled(V.dofmap.index_map_bs, self.node_blocks, exclude)
+        self.monitor = ContactMonitor(u, self._nodes, equilibrium, facet_tags, law.tag)
+
+    @property
+    def nodes(self) -> ContactDofs:
+        return self._nodes
+
+    @property
+    def moving(self) -> bool:
+        return self.law.moving
+
+    def snes_defaults(self, linear_law: bool) -> dict:
+        """SNES options this part needs: the VI solver."""
+        return {"snes_type": "vinewtonrsls"}
+
+    def terms(self, u, du, v, normal, ds):
+        return None
+
+    def update(self, time: float) -> None:
+        """The gaps at ``time`` (raises InputError where a ray loses the obstacle)."""
+        if self.moving:
+            self._nodes.gap = contact_gap(self.law, self._nodes, time)
+
+    def pressure(self) -> np.ndarray:
+        return self.monitor.nodal_pressure()
+
+    def report(self) -> "ContactReport":
+        return self.monitor.report()
+
+    def touching(self, tolerance: float) -> bool:
+        cd = self._nodes
+        return bool(np.any(cd.normal_displacement(self.u) >= cd.gap - tolerance))
+
+    def driving_displacement(self, time: float) -> Optional[float]:
+        if self.law.translation is None:
+            return None
+        d = np.asarray(self.law.translation(time), dtype=float).ravel()
+        return float(d[np.argmax(np.abs(d))]) if d.size else 0.0

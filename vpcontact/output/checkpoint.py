@@ -148,7 +148,7 @@ def history_arrays(history) -> dict:
 def forces_arrays(forces) -> dict:
     driver = [np.nan if d is None else d for d in forces.driver]
     return {"forces_times": np.array(forces.times), "forces_reactions": np.array(forces.reactions),
-            "forces_contact": np.array(forces.contact), "forces_driver": np.array(driver),
+            "forces_contact": np.array(forces.parts), "forces_driver": np.array(driver),
             "forces_driven": np.array([d is not None for d in forces.driver])}
 
 

@@ -141,45 +141,50 @@ def written_times(path: str | Path, comm) -> set[float]:
 
 
 class ContactHistory:
-    """u_ν, gap and nodal σ_ν at the contact nodes over time, gathered on rank 0.
+    """u_ν, gap and nodal σ_ν at the nodes of every contact part over time, gathered on rank 0
+    (part by part, in the problem's order; ``part`` holds each node's part index).
 
     Args:
         problem: the problem.
-        cdofs: the contact nodes (default: the problem's Signorini dofs).
-        pressure: u -> nodal σ_ν at ``cdofs`` (default: from the Signorini contact monitor).
+        parts: the contact parts to record (default: all of the problem's).
     """
 
-    def __init__(self, problem, cdofs=None, pressure=None):
-        cd = cdofs if cdofs is not None else problem.contact_dofs
-        if cd is None:
-            raise ValueError("the problem has no Signorini contact boundary")
+    def __init__(self, problem, parts=None):
+        self.parts = list(problem.contacts if parts is None else parts)
+        if not self.parts:
+            raise ValueError("the problem has no contact part")
         self.problem = problem
-        self.cdofs = cd
-        self._pressure = pressure
         self.comm = problem.mesh.comm
-        self.points = _gather(self.comm, cd.points)
-        self.gap = _gather(self.comm, cd.gap)  # at t = 0
+        self.names = [p.name for p in self.parts]
+        self.bounded = [p.bounded for p in self.parts]
+        self.points = self._gathered(lambda p: p.nodes.points)
+        self.gap = self._gathered(lambda p: p.nodes.gap)  # at t = 0
+        self.part = self._gathered(lambda p: np.full(len(p.nodes.gap), self.parts.index(p)))
         self.gaps: list[np.ndarray] = []      # at each recorded time (obstacles may move)
         self.times: list[float] = []
         self.normal_displacement: list[np.ndarray] = []
         self.pressure: list[np.ndarray] = []
 
-    def local_pressure(self) -> np.ndarray:
-        """Nodal σ_ν at this rank's contact nodes (collective for Signorini)."""
-        if self._pressure is not None:
-            return self._pressure(self.problem.u)
-        return self.problem.contact_monitor.nodal_pressure()
+    def _gathered(self, value) -> np.ndarray:
+        """``value(part)`` of every part, gathered on rank 0 and joined part after part."""
+        arrays = [_gather(self.comm, value(p)) for p in self.parts]
+        return np.concatenate(arrays) if self.comm.rank == 0 else np.zeros(0)
+
+    def unreachable(self) -> list[int]:
+        """Per part, the nodes whose normal rays missed the obstacle at t = 0 (collective)."""
+        return [self.comm.allreduce(0 if p.nodes.unreachable is None
+                                    else int(np.count_nonzero(p.nodes.unreachable)))
+                for p in self.parts]
 
     def record(self, t: float) -> None:
-        cd = self.cdofs
-        un = _gather(self.comm, cd.normal_displacement(self.problem.u))
-        p = _gather(self.comm, self.local_pressure())
-        g = _gather(self.comm, cd.gap)
+        un = self._gathered(lambda p: p.nodes.normal_displacement(self.problem.u))
+        pressure = self._gathered(lambda p: p.pressure())
+        gap = self._gathered(lambda p: p.nodes.gap)
         if self.comm.rank == 0:
-            self.gaps.append(g)
+            self.gaps.append(gap)
             self.times.append(t)
             self.normal_displacement.append(un)
-            self.pressure.append(p)
+            self.pressure.append(pressure)
 
     def restore(self, arrays: dict) -> None:
         """The records of a checkpoint (:mod:`vpcontact.output.checkpoint`), on rank 0."""
@@ -191,32 +196,45 @@ class ContactHistory:
             self.pressure = list(arrays["pressure"])
             self.gaps = list(arrays["gap"])
 
-    def closest_approach(self) -> Optional[dict]:
-        """Whether any node ever carried a compressive pressure (exact for normal compliance,
-        whose pressure is 0 off contact; Signorini's inactive nodes carry round-off, so its
-        runs ask the VI's active set instead), and the smallest clearance gap − u_ν over the
-        run with its time and node (rank 0; None elsewhere or without records)."""
-        if self.comm.rank != 0 or not self.times or not len(self.points):
+    def closest_approach(self, index: int = 0) -> Optional[dict]:
+        """For the part ``index``: whether it ever touched after the initial state (normal
+        compliance: a compressive pressure, which is exactly 0 off contact; Signorini, whose
+        inactive nodes carry round-off pressures: a clearance within 1e-10 max(1, |g|) of zero,
+        the VI's active set), and the
+        smallest clearance gap − u_ν over the run with its time and node (rank 0; None elsewhere
+        or without records)."""
+        at = np.flatnonzero(self.part == index) if self.comm.rank == 0 else []
+        if self.comm.rank != 0 or not self.times or not len(at):
             return None
-        touched = bool((np.array(self.pressure) < 0).any())
-        clearance = np.array(self.gaps) - np.array(self.normal_displacement)
+        clearance = (np.array(self.gaps) - np.array(self.normal_displacement))[:, at]
+        solved = slice(1, None)  # the records after the initial state's
+        if self.bounded[index]:
+            scale = max(1.0, float(np.abs(np.array(self.gaps)[:, at]).max()))
+            touched = bool((clearance[solved] <= 1e-10 * scale).any())
+        else:
+            touched = bool((np.array(self.pressure)[solved, at] < 0).any())
         k, i = np.unravel_index(int(np.argmin(clearance)), clearance.shape)
         return {"touched": touched, "clearance": float(clearance[k, i]),
-                "time": float(self.times[k]), "point": self.points[i].tolist()}
+                "time": float(self.times[k]), "point": self.points[at[i]].tolist()}
 
     def write_csv(self, path: str | Path) -> None:
-        """Long format: t, x, y, z, u_normal, gap, clearance, pressure, written by rank 0; the
-        file is on disk when any rank returns. ``gap`` is the obstacle's distance from the
-        node's reference position along its normal (it changes when the obstacle moves),
-        ``clearance`` = gap − u_normal the current one (0 where the node touches)."""
+        """Long format: t, x, y, z, u_normal, gap, clearance, pressure (and, with several
+        contact parts, part: the boundary part's name), written by rank 0; the file is on disk
+        when any rank returns. ``gap`` is the obstacle's distance from the node's reference
+        position along its normal (it changes when the obstacle moves), ``clearance`` =
+        gap − u_normal the current one (0 where the node touches)."""
+        several = len(self.parts) > 1
+
         def write():
+            names = [f",{self.names[i]}" if several else "" for i in self.part]
             with open(path, "w") as f:
-                f.write("t,x,y,z,u_normal,gap,clearance,pressure\n")
+                f.write("t,x,y,z,u_normal,gap,clearance,pressure" + (",part" if several else "")
+                        + "\n")
                 for t, un, gap, p in zip(self.times, self.normal_displacement, self.gaps,
                                          self.pressure):
-                    for (x, y, z), u_i, g_i, p_i in zip(self.points, un, gap, p):
+                    for (x, y, z), u_i, g_i, p_i, name in zip(self.points, un, gap, p, names):
                         f.write(f"{t:.10g},{x:.10g},{y:.10g},{z:.10g},"
-                                f"{u_i:.10e},{g_i:.10e},{g_i - u_i:.10e},{p_i:.10e}\n")
+                                f"{u_i:.10e},{g_i:.10e},{g_i - u_i:.10e},{p_i:.10e}{name}\n")
         on_rank0(self.comm, write)
 
 

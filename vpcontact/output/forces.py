@@ -2,9 +2,12 @@
 """Support reactions and the contact force over a run: ``reactions.csv`` and ``reactions.png``.
 
 At every recorded time: the force each Dirichlet part exerts on the body (its reaction, summed
-component by component over the part's prescribed dofs) and the total force of the obstacle or
-foundation on Γ3, both from the equilibrium residual (see :mod:`vpcontact.solver.dirichlet`).
-With the applied loads they balance: Σ reactions + contact force + ∫f_0 + ∫f_2 + point loads = 0.
+component by component over the part's prescribed dofs) and the force of each contact part's
+obstacle or foundation, all from the equilibrium residual (see :mod:`vpcontact.solver.dirichlet`).
+With the applied loads they balance: Σ reactions + Σ contact forces + ∫f_0 + ∫f_2 + point loads
+= 0. ``reactions.csv`` has a column per Dirichlet part and component (``<part>_x`` …), the total
+contact force (``contact_x`` …) and, when the scene has several contact parts, each part's
+(``<part>_x`` …, named after its boundary part).
 When a prescribed displacement or an obstacle's translation drives the run, its size is recorded
 too (the "displacement" column), so that force–displacement curves can be plotted as indentation
 and forming tests are.
@@ -27,42 +30,58 @@ class ForceHistory:
         self.problem = problem
         self.comm = problem.mesh.comm
         self.names = [part.name or f"part{i}" for i, part in enumerate(problem.dirichlet.parts)]
+        self.contact_names = list(problem.contact_names)
         self.dim = problem.V.dofmap.index_map_bs
         self.times: list[float] = []
         self.reactions: list[np.ndarray] = []   # (parts, dim) per time
-        self.contact: list[np.ndarray] = []     # (dim,) per time
+        self.parts: list[np.ndarray] = []       # (contact parts, dim) per time
         self.driver: list[Optional[float]] = []  # the driving displacement, if any
 
     def record(self, t: float) -> None:
         """Add the forces of the current state (collective)."""
-        reactions, contact = self.problem.support_forces()
+        reactions, contact = self.problem.support_forces(per_part=True)
         self.times.append(float(t))
         self.reactions.append(reactions)
-        self.contact.append(contact)
+        self.parts.append(contact)
         self.driver.append(self.problem.driving_displacement())
 
     def restore(self, arrays: dict) -> None:
         """The records of a checkpoint (:mod:`vpcontact.output.checkpoint`)."""
         self.times = [float(t) for t in arrays["times"]]
         self.reactions = list(arrays["reactions"])
-        self.contact = list(arrays["contact"])
+        self.parts = list(arrays["contact"])
         self.driver = [float(d) if driven else None
                        for d, driven in zip(arrays["driver"], arrays["driven"])]
+
+    @property
+    def contact(self) -> list[np.ndarray]:
+        """The total contact force (dim,) per recorded time."""
+        return [p.sum(axis=0) if len(p) else np.zeros(self.dim) for p in self.parts]
+
+    @property
+    def per_part(self) -> bool:
+        """Whether the outputs list the contact parts one by one (several parts)."""
+        return len(self.contact_names) > 1
 
     def _columns(self) -> list[str]:
         axes = "xyz"[:self.dim]
         cols = ["t"] + ([] if self.driver and self.driver[0] is None else ["displacement"])
         cols += [f"{name}_{a}" for name in self.names for a in axes]
-        return cols + [f"contact_{a}" for a in axes]
+        cols += [f"contact_{a}" for a in axes]
+        if self.per_part:
+            cols += [f"{name}_{a}" for name in self.contact_names for a in axes]
+        return cols
 
     def write_csv(self, path: str | Path) -> None:
         """One row per recorded time, written by rank 0; on disk when any rank returns."""
         def write():
             with open(path, "w") as f:
                 f.write(",".join(self._columns()) + "\n")
-                for t, d, r, c in zip(self.times, self.driver, self.reactions, self.contact):
+                for t, d, r, c, p in zip(self.times, self.driver, self.reactions, self.contact,
+                                         self.parts):
                     values = [f"{t:.10g}"] + ([] if d is None else [f"{d:.10e}"])
-                    values += [f"{v:.10e}" for v in np.concatenate([r.ravel(), c])]
+                    columns = [r.ravel(), c] + ([p.ravel()] if self.per_part else [])
+                    values += [f"{v:.10e}" for v in np.concatenate(columns)]
                     f.write(",".join(values) + "\n")
         on_rank0(self.comm, write)
 
@@ -74,6 +93,9 @@ class ForceHistory:
             if self.reactions else {},
             "contact_force_final": self.contact[-1].tolist() if self.contact else None,
             "contact_force": [c.tolist() for c in self.contact],
+            "contact_parts": {name: {"final": self.parts[-1][i].tolist() if self.parts else None,
+                                     "history": [p[i].tolist() for p in self.parts]}
+                              for i, name in enumerate(self.contact_names)},
         }
 
     def plot(self, path: str | Path, title: str) -> None:
@@ -98,6 +120,12 @@ class ForceHistory:
         for a in range(self.dim):
             if np.abs(contact[:, a]).max() > tiny:
                 axes[0].plot(t, contact[:, a], "--", label=f"contact, {'xyz'[a]}")
+        if self.per_part:
+            parts = np.array(self.parts)
+            for i, name in enumerate(self.contact_names):
+                for a in range(self.dim):
+                    if np.abs(parts[:, i, a]).max() > tiny:
+                        axes[0].plot(t, parts[:, i, a], ":", label=f"{name}, {'xyz'[a]}")
         axes[0].set(xlabel="t [s]", ylabel="force [N]", title="(a) reactions and contact force")
         if axes[0].get_legend_handles_labels()[0]:
             axes[0].legend(fontsize=7)

@@ -63,26 +63,30 @@ def deformed_configuration(path: str | Path, u, von_mises, title: str, scale: fl
 
 
 def contact_evolution(path: str | Path, history: ContactHistory, axis: int, title: str,
-                      line: tuple[int, float] | None = None, obstacle: bool = True) -> None:
-    """u_ν-component of the contact nodes: (a) along Γ3 at several times, (b) over time.
+                      line: tuple[int, float] | None = None, obstacle: bool = True,
+                      part: int = 0) -> None:
+    """u_ν-component of a contact part's nodes: (a) along it at several times, (b) over time.
 
     Args:
         axis: coordinate along which nodes are ordered on the horizontal axis (0 = x1).
         line: ``(coordinate, value)`` selecting nodes on a line in 3-D (e.g. x2 = 0.5).
+        part: index of the contact part in the history.
     Rank 0 only (the history is gathered there).
     """
     if history.comm.rank != 0:
         return
     plt = _pyplot()
     pts = history.points
-    sel = np.ones(len(pts), dtype=bool)
+    sel = history.part == part
+    if not sel.any():
+        return
     if line is not None:
         c, val = line
-        nearest = pts[np.argmin(np.abs(pts[:, c] - val)), c]
-        sel = np.isclose(pts[:, c], nearest)
+        nearest = pts[sel][np.argmin(np.abs(pts[sel, c] - val)), c]
+        sel &= np.isclose(pts[:, c], nearest)
     order = np.argsort(pts[sel, axis])
     xs = pts[sel, axis][order]
-    normal_sign = history.cdofs.sign
+    normal_sign = history.parts[part].nodes.sign
     u = np.array(history.normal_displacement)[:, sel][:, order] * normal_sign   # component value
     times = np.array(history.times)
     fig, (ax_a, ax_b) = plt.subplots(1, 2, figsize=(11, 4.2))

@@ -81,7 +81,7 @@ class RunParts:
     """What a run records into and answers to, besides the problem.
 
     Attributes:
-        history: records the contact nodes (default: a Signorini problem's).
+        history: records the contact nodes (default: those of the Signorini parts).
         forces: records the support reactions and the contact force (``reactions.csv``).
         xdmf_extra: (Function, refresh) pairs written besides u, stress and von Mises norm.
         progress: ``progress(step, report)`` after every accepted step, on every rank.
@@ -142,7 +142,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                                 extra=extra + list(xdmf_extra),
                                 append=restart is not None)
     if history is None and problem.contact_dofs is not None:
-        history = ContactHistory(problem)
+        history = ContactHistory(problem, [p for p in problem.contacts if p.bounded])
     if restart is not None:
         if history is not None:
             history.restore(restart.history)
@@ -162,9 +162,8 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
             record.times.append(step.time)
             record.newton_iterations.append(step.newton_iterations)
             record.reasons.append(step.reason)
-            report: Optional[ContactReport] = None
-            if problem.contact_monitor is not None:
-                report = problem.contact_monitor.report()
+            report: Optional[ContactReport] = problem.contact_report()
+            if report is not None:
                 record.contact.append(report)
             last = step.time >= t_final * (1 - 1e-12)
             with _timed(record, out):

@@ -26,12 +26,11 @@ import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
 
-from vpcontact.model.signorini import Signorini, contact_dofs
 from vpcontact.errors import Interrupted, ObstacleOutOfReach, OutputError
 from vpcontact.output import checkpoint, plots, runner
 from vpcontact.output.fields import ContactHistory, on_rank0
 from vpcontact.output.forces import ForceHistory
-from vpcontact.scene.builder import Model, obstacle_level_set
+from vpcontact.scene.builder import Model
 from vpcontact.solver.snes_options import time_split
 
 
@@ -121,59 +120,40 @@ class Session:
                              self.comm.size, self.out.resolve(), tuple(warnings))
 
     def _contact_warnings(self, history: Optional[ContactHistory], record) -> list:
-        """A contact part that never touched during the run (an obstacle that moved away, or
-        never came into reach): say so, with the closest approach (collective)."""
+        """Per contact part: nodes whose rays miss the obstacle, and a part that never touched
+        during the run (an obstacle that moved away, or never came into reach), with its
+        closest approach (collective)."""
         if history is None:
             return []
         warnings = []
-        cd = history.cdofs
-        missed = self.comm.allreduce(0 if cd.unreachable is None
-                                     else int(np.count_nonzero(cd.unreachable)))
-        if missed:
-            warnings.append(f"{missed} node(s) of the contact part "
-                            f"'{self.model.scene.contact.boundary}' face away from the obstacle "
-                            "(their normal rays miss it within max_distance, e.g. at the rim of a "
-                            "curved face): no contact there (contact.csv: gap = max_distance)")
-        approach = self.comm.bcast(history.closest_approach(), root=0)
-        if approach is None:
-            return warnings
-        touched = (any(c.active > 0 for c in record.contact) if record.contact
-                   else approach["touched"])
-        if touched:
-            return warnings
-        point = ", ".join(f"{c:.4g}" for c in approach["point"][:self.model.scene.dim])
-        return warnings + [
-            f"the contact part '{self.model.scene.contact.boundary}' never touched the obstacle "
-            f"or foundation: closest approach {approach['clearance']:.4g} at "
-            f"t = {approach['time']:.4g}, at ({point}); check [contact] (its gap, obstacle and "
-            "motion) if contact was expected"]
+        for index, (name, missed) in enumerate(zip(history.names, history.unreachable())):
+            if missed:
+                warnings.append(
+                    f"{missed} node(s) of the contact part '{name}' face away from the obstacle "
+                    "(their normal rays miss it within max_distance, e.g. at the rim of a curved "
+                    "face): no contact there (contact.csv: gap = max_distance)")
+            approach = self.comm.bcast(history.closest_approach(index), root=0)
+            if approach is None or approach["touched"]:
+                continue
+            point = ", ".join(f"{c:.4g}" for c in approach["point"][:self.model.scene.dim])
+            warnings.append(
+                f"the contact part '{name}' never touched the obstacle or foundation: closest "
+                f"approach {approach['clearance']:.4g} at t = {approach['time']:.4g}, at "
+                f"({point}); check its contact table (gap, obstacle and motion) if contact "
+                "was expected")
+        return warnings
 
     def _history(self) -> Optional[ContactHistory]:
-        """Contact nodes to record: Signorini's own, or normal compliance's on a planar Γ3."""
+        """Every contact part's nodes, when contact.csv or the figures are asked for."""
         scene, problem = self.model.scene, self.model.problem
         wanted = scene.output.contact_csv or scene.output.figures
-        if not wanted or scene.contact is None or scene.contact.type == "none":
+        if not wanted or not problem.contacts:
             return None
-        if scene.contact.type == "signorini":
-            return ContactHistory(problem)
-        law = problem.contact
-        gap = scene.contact.gap
-        if scene.contact.obstacle is not None:  # the foundation's surface: same nodal gaps
-            phi, _ = obstacle_level_set(scene)
-            spec = Signorini(law.tag, obstacle=phi, max_distance=scene.contact.max_distance)
-        else:
-            spec = Signorini(law.tag, gap=0.0 if gap is None or gap.is_constant and gap.value() == 0
-                             else (lambda x: gap.numpy(x)))
-        cdofs = contact_dofs(problem.V, self.model.facet_tags, spec,
-                             exclude=problem.dirichlet.prescribed)
-
-        def pressure(u):
-            return law.normal_stress(cdofs.normal_displacement(u) - cdofs.gap)
-
-        return ContactHistory(problem, cdofs, pressure)
+        return ContactHistory(problem)
 
     def _pressure_field(self, history):
-        """Nodal contact pressure σ_ν as a P1 field (zero off Γ3; P_k: its vertex values)."""
+        """Nodal contact pressure σ_ν as a P1 field (zero off the contact parts; P_k: its
+        vertex values)."""
         problem = self.model.problem
         if history is None:
             return ()
@@ -181,17 +161,18 @@ class Session:
                              name="contact_pressure")
         V = problem.V
         bs = V.dofmap.index_map_bs
-        nodes = history.cdofs.dofs // bs  # vector dof -> its node (the scalar dof)
+        nodes = [part.nodes.dofs // bs for part in history.parts]  # vector dof -> node
         nodal = field
         if V.ufl_element().degree() != 1:
             scalar, to_parent = V.sub(0).collapse()
             of_node = np.empty(len(V.tabulate_dof_coordinates()), dtype=np.int32)
             of_node[np.asarray(to_parent) // bs] = np.arange(len(to_parent), dtype=np.int32)
-            nodes = of_node[nodes]
+            nodes = [of_node[n] for n in nodes]
             nodal = fem.Function(scalar)
 
         def refresh():
-            nodal.x.array[nodes] = history.local_pressure()
+            for part, at in zip(history.parts, nodes):
+                nodal.x.array[at] = part.pressure()
             nodal.x.scatter_forward()
             if nodal is not field:
                 field.interpolate(nodal)
@@ -214,9 +195,12 @@ class Session:
         if history is not None and scene.dim >= 2:
             axis = 0
             line = (1, 0.5 * sum(_bounds(problem, 1))) if scene.dim == 3 else None
-            plots.contact_evolution(self.out / "contact_history.png", history, axis=axis,
-                                    title=f"{scene.name}: normal displacement of the contact nodes",
-                                    line=line, obstacle=scene.contact.type == "signorini")
+            for i, part in enumerate(history.parts):
+                suffix = "" if i == 0 else f"_{part.name}"
+                plots.contact_evolution(
+                    self.out / f"contact_history{suffix}.png", history, axis=axis,
+                    title=f"{scene.name}: normal displacement of the contact nodes of "
+                          f"'{part.name}'", line=line, obstacle=part.bounded, part=i)
 
     def _write_summary(self, record, wall: float, error: Optional[Exception],
                        warnings: list) -> None:
@@ -260,9 +244,10 @@ def _located(scene, err: Exception) -> Exception:
     error of the scene's motion (or rotation, or moving level set): say where in the file."""
     if not isinstance(err, ObstacleOutOfReach):
         return err
-    contact = scene.contact
-    key = ("contact.motion" if contact.motion is not None else
-           "contact.rotation" if contact.rotation is not None else "contact.obstacle")
+    index, contact = scene.contact_part(err.part)
+    where = scene.contact_key(index)
+    key = (f"{where}.motion" if contact.motion is not None else
+           f"{where}.rotation" if contact.rotation is not None else f"{where}.obstacle")
     return scene.error(key, str(err))
 
 

@@ -49,7 +49,6 @@ class Model:
     problem: QuasistaticProblem
     facet_tags: dmesh.MeshTagsMetaClass
     part_tags: Dict[str, int]           # boundary part name -> facet tag
-    contact_tag: Optional[int]
 
 
 def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
@@ -70,9 +69,9 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
     loads = _loads(scene, part_tags)
     dirichlet = _dirichlet(scene, part_tags, mesh, facet_tags)
     try:
-        contact, contact_tag = _contact(scene, part_tags, mesh, facet_tags)
+        contacts = _contacts(scene, part_tags, mesh, facet_tags)
         problem = QuasistaticProblem(mesh, facet_tags, law, loads=loads, dirichlet=dirichlet,
-                                     contact=contact, degree=scene.degree,
+                                     contact=contacts, degree=scene.degree,
                                      formulation=scene.formulation,
                                      petsc_options=dict(scene.solver.petsc_options),
                                      predictor=scene.solver.predictor,
@@ -83,25 +82,38 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
         raise scene.error("solver.petsc_options" + (f".{err.option}" if known else ""),
                           str(err)) from None
     except InputError as err:  # located at the key its raiser named (the mesh if none)
-        raise scene.error(err.key or "mesh", str(err)) from None
-    _check_contact_output(scene, mesh, facet_tags, contact_tag)
+        raise scene.error(_scene_key(scene, err), str(err)) from None
+    _check_contact_output(scene, mesh, facet_tags, part_tags)
     _initial_state(scene, problem)
-    return Model(scene, problem, facet_tags, part_tags, contact_tag)
+    return Model(scene, problem, facet_tags, part_tags)
 
 
-def _check_contact_output(scene: Scene, mesh, facet_tags, tag) -> None:
+def _scene_key(scene: Scene, err: InputError) -> str:
+    """The scene key of an error: its own, with ``contact`` made the key of the contact table
+    of the part it names (``contact[1].obstacle``); the mesh if it has none."""
+    key = err.key or "mesh"
+    if err.part is not None and (key == "contact" or key.startswith("contact.")):
+        index, _ = scene.contact_part(err.part)
+        key = scene.contact_key(index) + key[len("contact"):]
+    return key
+
+
+def _check_contact_output(scene: Scene, mesh, facet_tags, part_tags) -> None:
     """Normal compliance's contact output (contact.csv, figures) is recorded at the nodes of Γ3
     in their vertex normals, which a face that is not an axis-aligned plane has for P1 only."""
     output = scene.output
-    if (scene.contact is None or scene.contact.type != "normal_compliance" or scene.degree == 1
-            or not (output.contact_csv or output.figures)):
+    if scene.degree == 1 or not (output.contact_csv or output.figures):
         return
-    if axis_aligned_normal(mesh, facet_tags, tag) is None:
-        raise scene.error("discretization.degree", (
-            f"normal compliance with degree = {scene.degree} on a contact face that is not an "
-            "axis-aligned plane: its contact output (contact.csv, figures) is recorded in vertex "
-            "normals, for P1 displacements only; use degree = 1, or set [output] contact_csv = "
-            "false and figures = false to run it without that output"))
+    for spec in scene.contacts:
+        if spec.type != "normal_compliance":
+            continue
+        if axis_aligned_normal(mesh, facet_tags, part_tags[spec.boundary]) is None:
+            raise scene.error("discretization.degree", (
+                f"normal compliance with degree = {scene.degree} on a contact face "
+                f"({spec.boundary!r}) that is not an axis-aligned plane: its contact output "
+                "(contact.csv, figures) is recorded in vertex normals, for P1 displacements only; "
+                "use degree = 1, or set [output] contact_csv = false and figures = false to run "
+                "it without that output"))
 
 
 def _mesh(scene: Scene, comm):
@@ -278,32 +290,46 @@ def _loads(scene: Scene, part_tags) -> Loads:
     return loads
 
 
-def obstacle_level_set(scene: Scene):
-    """The obstacle of ``[contact]`` as a function φ(x) or φ(x, t), and whether it takes t."""
-    obstacle = scene.contact.obstacle
+def obstacle_level_set(spec, dim: int):
+    """The obstacle of a contact table as a function φ(x) or φ(x, t), and whether it takes t."""
+    obstacle = spec.obstacle
     if isinstance(obstacle, ObstacleShape):
-        return shape_level_set(obstacle.shape, dict(obstacle.params), scene.dim), False
+        return shape_level_set(obstacle.shape, dict(obstacle.params), dim), False
     if obstacle.depends_on_time:
         return (lambda x, t: obstacle.numpy(x, t)), True
     return (lambda x: obstacle.numpy(x)), False
 
 
-def _contact(scene: Scene, part_tags, mesh, facet_tags):
-    spec = scene.contact
-    if spec is None or spec.type == "none":
-        return None, None
-    tag = part_tags[spec.boundary]
+def _contacts(scene: Scene, part_tags, mesh, facet_tags) -> dict:
+    """The contact parts' conditions, by boundary part name, in file order."""
+    contacts = {}
+    for spec in scene.contacts:
+        try:
+            contacts[spec.boundary] = _condition(scene, spec, part_tags[spec.boundary], mesh,
+                                                 facet_tags)
+        except InputError as err:
+            err.part = spec.boundary
+            raise
+    return contacts
+
+
+def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
+    """The law of one contact table on the facets ``tag``."""
     gap = spec.gap
     if spec.type == "normal_compliance":
         if spec.obstacle is not None:
-            g = _foundation_gap(scene, mesh, facet_tags, tag)
+            phi, _ = obstacle_level_set(spec, scene.dim)
+            surface = Signorini(tag, obstacle=phi, max_distance=spec.max_distance or 1e3)
+            g = _foundation_gap(mesh, facet_tags, surface)
         elif gap is None or gap.is_constant:
             g = 0.0 if gap is None else gap.value()
+            surface = None
         else:
             g = gap.ufl(ufl.SpatialCoordinate(mesh), 0.0)
-        return NormalCompliance(tag, mu=spec.mu, alpha=spec.alpha, gap=g), tag
+            surface = Signorini(tag, gap=lambda x: gap.numpy(x))
+        return NormalCompliance(tag, mu=spec.mu, alpha=spec.alpha, gap=g, surface=surface)
     if spec.obstacle is not None:
-        phi, moves = obstacle_level_set(scene)
+        phi, moves = obstacle_level_set(spec, scene.dim)
         motion = spec.motion
         translation = (None if motion is None or all(e.is_constant and e.value() == 0.0
                                                        for e in motion)
@@ -314,20 +340,17 @@ def _contact(scene: Scene, part_tags, mesh, facet_tags):
         center = (0.0,) * 3 if turn is None else turn.center + (0.0,) * (3 - len(turn.center))
         return Signorini(tag, obstacle=phi, max_distance=spec.max_distance or 1e3,
                          obstacle_moves=moves, translation=translation, rotation=rotation,
-                         rotation_center=center), tag
+                         rotation_center=center)
     if gap is None or gap.is_constant:
-        return Signorini(tag, gap=0.0 if gap is None else gap.value()), tag
-    return Signorini(tag, gap=lambda x: gap.numpy(x)), tag
+        return Signorini(tag, gap=0.0 if gap is None else gap.value())
+    return Signorini(tag, gap=lambda x: gap.numpy(x))
 
 
-def _foundation_gap(scene: Scene, mesh, facet_tags, tag: int):
+def _foundation_gap(mesh, facet_tags, surface: Signorini):
     """Normal compliance against a foundation surface: g at each node of Γ3 is the distance to
     it along the node's normal (as for a Signorini obstacle), interpolated by P1 functions."""
-    phi, _ = obstacle_level_set(scene)
     V = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))
-    cd = contact_dofs(V, facet_tags, Signorini(tag, obstacle=phi,
-                                               max_distance=scene.contact.max_distance or 1e3),
-                      rotate=True)
+    cd = contact_dofs(V, facet_tags, surface, rotate=True)
     g = fem.Function(fem.FunctionSpace(mesh, ("Lagrange", 1)), name="gap")
     g.x.array[cd.nodes] = cd.gap
     g.x.scatter_forward()

@@ -40,7 +40,7 @@ from pathlib import Path
 
 from vpcontact.scene import write
 from vpcontact.scene.locate import Locator
-from vpcontact.scene.read import read_scene
+from vpcontact.scene.read import contact_key, read_scene
 from vpcontact.scene.schema import Problem, Report, SceneError
 from vpcontact.scene.specs import (BoundaryPart, BoxSelector, ContactSpec, InitialSpec, LawSpec,
                                    LoadSpec, MaterialSpec, MeshSpec, OutputSpec, PlaneSelector,
@@ -77,7 +77,9 @@ class Scene:
         loads: body force and point loads.
         material: E, ν, 2-D model.
         law: the rate-type law.
-        contact: the contact condition (type ``"none"`` without contact).
+        contacts: the contact parts' conditions, in file order (empty without contact).
+        contact_array: the scene wrote them as ``[[contact]]`` (keys ``contact[i].…``) rather
+            than one ``[contact]`` table.
         initial: u_0 and σ_0.
         time: T, k and the allowed step halvings.
         formulation: ``"displacement"`` or ``"mixed"`` (resolved from ``"auto"``).
@@ -96,15 +98,33 @@ class Scene:
     loads: LoadSpec
     material: MaterialSpec
     law: LawSpec
-    contact: ContactSpec
+    contacts: tuple[ContactSpec, ...]
     initial: InitialSpec
     time: TimeSpec
     degree: int
     solver: SolverSpec
     output: OutputSpec
     formulation: str = "displacement"
+    contact_array: bool = False
     hash: str = field(default="", compare=False)
     locator: Locator | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def contact(self) -> ContactSpec:
+        """The first contact part's condition (type ``"none"`` without contact)."""
+        return self.contacts[0] if self.contacts else ContactSpec()
+
+    def contact_key(self, index: int) -> str:
+        """The scene key of the ``index``-th contact table (``contact`` or ``contact[i]``)."""
+        return contact_key(index, self.contact_array)
+
+    def contact_part(self, boundary: str | None) -> tuple[int, ContactSpec]:
+        """(index, condition) of the contact table on the boundary part ``boundary`` (None: the
+        first)."""
+        for i, spec in enumerate(self.contacts):
+            if boundary is None or spec.boundary == boundary:
+                return i, spec
+        raise KeyError(boundary)
 
     def where(self, path: str) -> str:
         """``"file:line"`` of a key path such as ``"boundary.bottom"`` (``"file"`` if unknown)."""

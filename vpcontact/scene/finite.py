@@ -41,13 +41,18 @@ def check_finite(scene: Scene, mesh, part_tags, facet_tags) -> None:
             checks.append((f"boundary.{name}.traction", part.traction, on_part(name)))
         if part.displacement is not None:
             checks.append((f"boundary.{name}.displacement", part.displacement, on_part(name)))
-    contact = scene.contact
-    if contact is not None and contact.type != "none" and contact.gap is not None:
-        checks.append(("contact.gap", (contact.gap,), on_part(contact.boundary)))
-    if contact is not None and contact.motion is not None:
-        checks.append(("contact.motion", contact.motion, np.zeros((3, 1))))
-    if contact is not None and contact.rotation is not None:
-        checks.append(("contact.rotation.angle", (contact.rotation.angle,), np.zeros((3, 1))))
+    single = []  # keys of single expressions (no component index)
+    for i, contact in enumerate(scene.contacts):
+        where = scene.contact_key(i)
+        if contact.gap is not None:
+            checks.append((f"{where}.gap", (contact.gap,), on_part(contact.boundary)))
+            single.append(f"{where}.gap")
+        if contact.motion is not None:
+            checks.append((f"{where}.motion", contact.motion, np.zeros((3, 1))))
+        if contact.rotation is not None:
+            checks.append((f"{where}.rotation.angle", (contact.rotation.angle,),
+                           np.zeros((3, 1))))
+            single.append(f"{where}.rotation.angle")
     for i, point in enumerate(scene.loads.point):
         checks.append((f"loads.point[{i}].force", point.force, np.zeros((3, 1))))
     found = None
@@ -59,8 +64,7 @@ def check_finite(scene: Scene, mesh, part_tags, facet_tags) -> None:
                 values = e.numpy(x, t) if x.shape[1] else np.zeros(0)
                 bad = np.flatnonzero(~np.isfinite(values))
                 if len(bad):
-                    key = (path if len(exprs) == 1 and path in ("contact.gap", "contact.rotation.angle")
-                           else f"{path}[{j}]")
+                    key = (path if len(exprs) == 1 and path in single else f"{path}[{j}]")
                     point = ((x[:scene.dim, bad[0]] + 0.0).round(12).tolist()
                              if "x" in e.names else None)
                     found = (key, e.source, float(values[bad[0]]), point, float(t))

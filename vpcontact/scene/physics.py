@@ -4,17 +4,19 @@
 * ``[law]``: σ̇ = E ε̇ + G(σ, ε) with G = 0 (``elastic``), Perzyna's
   G = -(1/μ*) E(σ - P_K σ) (``perzyna``) or G = aσ + bε (``linear``).
 * ``[contact]``: Signorini's condition u_ν ≤ g (a gap g(x) or a rigid obstacle {φ ≤ 0}) or normal
-  compliance σ_ν = -(1/μ)(u_ν - g)_+^α (paper eq. (15)).
+  compliance σ_ν = -(1/μ)(u_ν - g)_+^α (paper eq. (15)); ``[[contact]]``, an array of such
+  tables, for several contact parts (each on its own boundary part).
 """
 
 from __future__ import annotations
 
 from vpcontact.scene.expressions import Expression
-from vpcontact.scene.schema import Check, Table, at_least, between, constant_value, greater
+from vpcontact.scene.schema import (Check, Table, at_least, between, constant_value, greater,
+                                    type_name)
 from vpcontact.scene.locate import join
 from vpcontact.scene.specs import SHAPES, ContactSpec, LawSpec, ObstacleRotation, ObstacleShape
 
-__all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contact", "read_law"]
+__all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contacts", "read_law"]
 
 LAW_KEYS = ("type", "scheme", "sigma_y", "mu_star", "yield_set", "a", "b")
 CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "motion", "rotation", "max_distance", "mu",
@@ -72,11 +74,39 @@ def _constant(t: Table, key: str, check: Check | None = None) -> Expression | No
     return expression if value is not None and message is None else None
 
 
-def read_contact(top: Table, dim: int | None) -> ContactSpec | None:
-    """``[contact]`` (absent: type none); ``None`` if its type is invalid."""
+def read_contacts(top: Table, dim: int | None) -> tuple[tuple[ContactSpec | None, ...], bool]:
+    """``[contact]`` or ``[[contact]]``: (the contact parts' specs, in file order — ``None`` for a
+    table whose type is invalid; empty without contact or with type none —, whether the scene
+    wrote an array of tables)."""
+    raw = top.data.get("contact")
+    if raw is None:
+        return (), False
+    if isinstance(raw, list):
+        specs = []
+        for i, item in enumerate(raw):
+            where = join(top.at("contact"), i)
+            if not isinstance(item, dict):
+                top.report.add(where, f"expected a table, got {type_name(item)}")
+                specs.append(None)
+                continue
+            t = Table(top.report, where, item, CONTACT_KEYS)
+            if t.data.get("type") == "none":
+                t.add("type", "'none' is for a single [contact] table; leave this one out")
+                specs.append(None)
+                continue
+            specs.append(_read_contact(t, dim))
+        if not raw:
+            top.add("contact", "an empty array: give at least one [[contact]] table")
+        return tuple(specs), True
     t = top.table("contact", CONTACT_KEYS)
     if t is None:
-        return ContactSpec() if "contact" not in top.data else None
+        return (None,), False
+    spec = _read_contact(t, dim)
+    return ((), False) if spec is not None and spec.type == "none" else ((spec,), False)
+
+
+def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
+    """One contact table; ``None`` if its type is invalid."""
     kind = t.choice("type", CONTACT_TYPES)
     if kind is None:
         return None

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from vpcontact.scene.locate import join
-from vpcontact.scene.physics import read_contact, read_law
+from vpcontact.scene.physics import read_contacts, read_law
 from vpcontact.scene.schema import (REQUIRED, Report, Table, at_least, between, fmt, greater, type_name,
                                     unknown_key)
 from vpcontact.linear_solvers import LINEAR_SOLVERS
@@ -58,8 +58,8 @@ def read_scene(data: dict, report: Report, base_dir: Path, default_name: str) ->
     mesh = read_mesh(top, base_dir)
     dim = mesh.dim if mesh is not None else None
     boundaries = read_boundaries(top, mesh)
-    contact = read_contact(top, dim)
-    check_parts(report, boundaries, contact, "contact" in data)
+    contacts, array = read_contacts(top, dim)
+    check_parts(report, boundaries, contacts, array, data.get("contact"))
     material, law = read_material(top, dim), read_law(top, dim)
     return {
         "name": top.string("name", default_name, pattern=SCENE_NAME),
@@ -70,12 +70,13 @@ def read_scene(data: dict, report: Report, base_dir: Path, default_name: str) ->
         "loads": read_loads(top, dim),
         "material": material,
         "law": law,
-        "contact": contact,
+        "contacts": tuple(c for c in contacts if c is not None),
+        "contact_array": array,
         "initial": read_initial(top, dim),
         "time": read_time(top),
         **read_discretization(top, dim, material, law),
         "solver": read_solver(top),
-        "output": read_output(top, contact),
+        "output": read_output(top, contacts),
     }
 
 
@@ -228,36 +229,53 @@ def _read_box(t: Table, dim: int | None) -> BoxSelector | None:
     return None if bad else BoxSelector(lower, upper)
 
 
-def check_parts(report: Report, parts: dict[str, BoundaryPart], contact: ContactSpec | None,
-                has_contact_table: bool) -> None:
-    """Cross checks: a Dirichlet part exists; contact parts match ``[contact]``. (Whether the
+def check_parts(report: Report, parts: dict[str, BoundaryPart],
+                contacts: tuple[ContactSpec | None, ...], array: bool, raw_contact) -> None:
+    """Cross checks: a Dirichlet part exists; every boundary part of kind contact has a contact
+    table and every contact table names its own boundary part of kind contact. (Whether the
     Dirichlet parts hold the body is checked on the mesh, by the builder.)"""
     if not any(part.kind in DIRICHLET_KINDS for part in parts.values()):
         report.add("boundary", "no boundary part has kind = 'clamped', 'displacement' or "
                                "'symmetry'; at least one is needed (Γ1 must have positive "
                                "measure, and the Dirichlet parts must hold the body)")
-    if contact is None:
-        return
-    for name, part in parts.items():
-        if part.kind != "contact":
+    if any(c is None for c in contacts):
+        return  # an invalid contact table: reported where it is
+    named = {}
+    for i, contact in enumerate(contacts):
+        where = join(contact_key(i, array), "boundary")
+        if contact.boundary is None:
             continue
-        where = join(join("boundary", name), "kind")
-        if contact.type == "none":
-            why = ("the scene has no [contact] section" if not has_contact_table
-                   else "contact.type is 'none'")
-            report.add(where, f"boundary part {name!r} has kind 'contact' but {why}")
-        elif contact.boundary in parts and contact.boundary != name:  # (a missing name is
-            # reported once, at contact.boundary)
-            report.add(where, f"only one contact part is supported, and contact.boundary names "
-                              f"{contact.boundary!r}")
-    if contact.type != "none" and contact.boundary is not None:
         target = parts.get(contact.boundary)
         if target is None:
-            report.add("contact.boundary", f"no boundary part named {contact.boundary!r}"
-                                           + _suggest(contact.boundary, list(parts)))
+            report.add(where, f"no boundary part named {contact.boundary!r}"
+                              + _suggest(contact.boundary, list(parts)))
         elif target.kind is not None and target.kind != "contact":
-            report.add("contact.boundary", f"boundary part {contact.boundary!r} has kind "
-                                           f"{target.kind!r}, not 'contact'")
+            report.add(where, f"boundary part {contact.boundary!r} has kind {target.kind!r}, "
+                              "not 'contact'")
+        elif contact.boundary in named:
+            report.add(where, f"boundary part {contact.boundary!r} has a contact table already "
+                              f"({contact_key(named[contact.boundary], array)}); one contact "
+                              "condition per part")
+        else:
+            named[contact.boundary] = i
+    for name, part in parts.items():
+        if part.kind != "contact" or name in named:
+            continue
+        where = join(join("boundary", name), "kind")
+        if raw_contact is None:
+            why = "the scene has no [contact] section"
+        elif not contacts:
+            why = "contact.type is 'none'"
+        else:
+            why = "no contact table names it as its boundary"
+        if contacts and any(c.boundary not in parts for c in contacts):
+            continue  # the misspelt name is reported at the contact table
+        report.add(where, f"boundary part {name!r} has kind 'contact' but {why}")
+
+
+def contact_key(index: int, array: bool) -> str:
+    """The scene key of the ``index``-th contact table: ``contact`` or ``contact[index]``."""
+    return f"contact[{index}]" if array else "contact"
 
 
 def _suggest(name: str, names: list[str]) -> str:
@@ -398,12 +416,11 @@ def _petsc_option_problem(key: str, value: Any) -> str | None:
     return None
 
 
-def read_output(top: Table, contact: ContactSpec | None) -> OutputSpec:
+def read_output(top: Table, contacts: tuple) -> OutputSpec:
     """``[output]``: XDMF, contact CSV (only with contact), figures, XDMF stride, checkpoints."""
     t = top.section("output", ("xdmf", "contact_csv", "figures", "every", "checkpoint_every"))
-    with_contact = contact is not None and contact.type != "none"
-    contact_csv = t.boolean("contact_csv", with_contact)
-    if contact_csv and contact is not None and not with_contact:
+    contact_csv = t.boolean("contact_csv", bool(contacts))
+    if contact_csv and not contacts:
         t.add("contact_csv", "needs a [contact] section with type other than 'none'")
     return OutputSpec(xdmf=t.boolean("xdmf", True), contact_csv=contact_csv,
                       figures=t.boolean("figures", True),

@@ -95,7 +95,7 @@ def _table(header: str, entries: dict[str, Any]) -> list[str]:
 
 def dump(scene: Any) -> str:
     """The resolved ``scene`` (a :class:`vpcontact.scene.Scene`) as TOML text."""
-    mesh, law, contact = scene.mesh, scene.law, scene.contact
+    mesh, law = scene.mesh, scene.law
     blocks = [f"# Resolved scene {scene.name!r} (all defaults written out).", ""]
     blocks += _table("", {"name": scene.name, "description": scene.description})
     if mesh.builtin:
@@ -116,13 +116,17 @@ def dump(scene: Any) -> str:
     blocks += _table("law", {"type": law.type, "scheme": law.scheme, "sigma_y": law.sigma_y,
                              "mu_star": law.mu_star, "yield_set": law.yield_set, "a": law.a,
                              "b": law.b})
-    if contact.type != "none":
-        blocks += _table("contact", {
+    for contact in scene.contacts:
+        entries = {
             "type": contact.type, "boundary": contact.boundary, "gap": contact.gap,
             "obstacle": contact.obstacle, "motion": contact.motion,
             "rotation": contact.rotation,
             "max_distance": contact.max_distance, "mu": contact.mu,
-            "alpha": contact.alpha})
+            "alpha": contact.alpha}
+        if scene.contact_array:
+            blocks += ["[[contact]]"] + _table("", entries)
+        else:
+            blocks += _table("contact", entries)
     blocks += _table("initial", {"u0": scene.initial.u0, "sigma0": scene.initial.sigma0})
     time = scene.time
     blocks += _table("time", {"T": time.T, "k": time.k, "max_cuts": time.max_cuts,

@@ -27,7 +27,6 @@ import dolfinx.fem.petsc  # noqa: F401  (fem.petsc)
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor, past_nodes
 from vpcontact.errors import InputError, NonFiniteStateError, ObstacleOutOfReach, StepRejected
 from vpcontact.solver.step_solver import StepSolver
@@ -35,8 +34,7 @@ from vpcontact.model.fields import Displacement, DisplacementPressure
 from vpcontact.model.locking import check_formulation, locks
 from vpcontact.model.quadrature import QuadratureState
 from vpcontact.model.frames import rotation_matrix
-from vpcontact.model.signorini import (ContactMonitor, Signorini, contact_dofs, contact_gap,
-                                       variable_bounds)
+from vpcontact.model.contact import merged_bounds, merged_frames, merged_report
 from vpcontact.solver.bdf2 import Bdf2, check_time_scheme
 from vpcontact.solver.dirichlet import Dirichlet, DirichletParts
 from vpcontact.solver.loads import Loads, PointDofs, as_vector
@@ -67,7 +65,9 @@ class QuasistaticProblem:
             :mod:`vpcontact.solver.dirichlet`). Without a clamped part they must remove every
             rigid motion.
         loads: body force and tractions.
-        contact: contact condition on Γ3 or None.
+        contact: the contact condition(s): None, one law (a part named "contact"), a sequence
+            of laws (parts "contact1", "contact2", ...) or a dict part name -> law, in order (see
+            :mod:`vpcontact.model.contact`: a node shared by parts belongs to the first).
         degree: polynomial degree of the displacement (1 = the paper's P1/P0 pairing; None: 1,
             or 2 for the mixed formulation).
         formulation: "displacement" (u alone) or "mixed" (Taylor–Hood P2–P1 displacement and
@@ -90,9 +90,9 @@ class QuasistaticProblem:
         time_scheme: "euler" (the paper's: implicit or explicit Euler, as the law says) or
             "bdf2" (second-order backward differentiation of the law, for implicit laws; the
             first step is implicit Euler; see :class:`~vpcontact.solver.bdf2.Bdf2`).
-        rotate_contact: Signorini only. None: local frames at the contact nodes where Γ3 is not
-            an axis-aligned plane, plain dofs where it is; True: local frames always (identity
-            frames on an axis-aligned Γ3, to test one path against the other).
+        rotate_contact: Signorini parts only. None: local frames at the contact nodes where Γ3
+            is not an axis-aligned plane, plain dofs where it is; True: local frames always
+            (identity frames on an axis-aligned Γ3, to test one path against the other).
     """
 
     def __init__(self, mesh, facet_tags, law, clamped_tag: Optional[int] = None,
@@ -113,7 +113,8 @@ class QuasistaticProblem:
         self.predictor = predictor
         self.mesh = mesh
         self.law = law
-        self.contact = contact
+        self._contact_laws = _named(contact)
+        self.contact = next(iter(self._contact_laws.values()), None)  # the first part's law
         dim = mesh.topology.dim
         if formulation is None:  # P1 asked for explicitly: the paper's displacement scheme
             formulation = "mixed" if locks(law) and degree != 1 else "displacement"
@@ -172,20 +173,30 @@ class QuasistaticProblem:
         self.equilibrium = residual  # (σ, ε(v)) - (f, v): reactions and contact forces
         self._equilibrium_form = fem.form(residual)
         self._equilibrium_vec = None
+        # The contact parts, in order: a node belongs to the first part that reaches it.
+        self.contacts = []
+        taken = self.dirichlet.prescribed
+        for name, condition in self._contact_laws.items():
+            try:
+                part = condition.part(self.u, facet_tags, residual, name=name, exclude=taken,
+                                      rotate=rotate_contact)
+            except InputError as err:
+                err.part = name
+                raise
+            self.contacts.append(part)
+            taken = np.union1d(taken, _node_dofs(self.V, part.node_blocks)).astype(np.int32)
         defaults = {}
+        for part in self.contacts:
+            defaults.update(part.snes_defaults(law.linear_in_strain))
         if not law.linear_in_strain:
             # Stiff elastic (E ~ 1e8) against soft viscous (μ*/k) branches: full Newton steps
             # overshoot where points unload; the l2 line search restores convergence.
             defaults["snes_linesearch_type"] = "l2"
-        elif isinstance(contact, NormalCompliance) and contact.alpha < 1.0:
-            # p ↦ p^α is concave: full steps can overshoot past contact onset and cycle.
-            defaults["snes_linesearch_type"] = "bt"
-        if isinstance(contact, Signorini):
-            defaults["snes_type"] = "vinewtonrsls"
-        elif contact is not None:
-            normal = ufl.FacetNormal(mesh)
-            residual += contact.residual(self.u, v, normal, ds)
-            jacobian += contact.jacobian(self.u, du, v, normal, ds)
+        normal = ufl.FacetNormal(mesh)
+        terms = [t for t in (p.terms(self.u, du, v, normal, ds) for p in self.contacts) if t]
+        for r, j in terms:
+            residual += r
+            jacobian += j
         options = {**defaults, **(petsc_options or {})}
 
         # Unknown scale for SNES: an exact power of two far below any displacement of interest.
@@ -194,31 +205,21 @@ class QuasistaticProblem:
         self._point_loads = [PointDofs(self.V, p) for p in loads.points]
         # Only what is called for: a constitutive update linear in ε with no compliance term
         # has a Jacobian that changes with the step size only; it is factorized once per size.
-        constant_jacobian = law.linear_in_strain and (contact is None or isinstance(contact, Signorini))
+        constant_jacobian = law.linear_in_strain and not terms
         self.fields.compile(residual, jacobian)
-        self.contact_dofs = None
-        self.contact_monitor = None
         rotation = None
-        if isinstance(contact, Signorini):
-            self.contact_dofs = contact_dofs(self.V, facet_tags, contact,
-                                             exclude=self.dirichlet.prescribed,
-                                             rotate=rotate_contact)
-            if self.contact_dofs.rotated:
-                rotation = rotation_matrix(self.V, self.contact_dofs.frames, self.fields)
+        frames = merged_frames(mesh.comm, self.contacts)
+        if frames is not None:
+            rotation = rotation_matrix(self.V, frames, self.fields)
         self.solver = StepSolver(self.fields, self.bcs, self._update_stress,
                                  options, options_prefix, scale=scale,
                                  load=sum(external[1:], external[0]) if external else None,
                                  point_forces=self._point_forces if self._point_loads else None,
                                  constant_jacobian=constant_jacobian, rotation=rotation,
                                  linear=linear)
-        if isinstance(contact, Signorini):
-            self.solver.set_bounds(*variable_bounds(self.u, self.contact_dofs))
-            self.contact_monitor = ContactMonitor(self.u, self.contact_dofs, self.equilibrium,
-                                                  facet_tags, contact.tag)
-        self._contact_nodes = None
-        if contact is not None:
-            self._contact_nodes = _unrolled(self.V, fem.locate_dofs_topological(
-                self.V, dim - 1, facet_tags.find(contact.tag)), self.dirichlet.prescribed)
+        bounds = merged_bounds(self.u, self.contacts)
+        if bounds is not None:
+            self.solver.set_bounds(*bounds)
         self._correction_expr = None  # compiled on first use (outputs of the mixed formulation)
         self._contact_active = False  # after the last accepted step
         self.step_index = 0
@@ -290,9 +291,8 @@ class QuasistaticProblem:
             fem.petsc.set_bc(self.u.vector, self.bcs)
             self.u.x.scatter_forward()
         try:
-            if isinstance(self.contact, Signorini) and self.contact.moving:
-                self.contact_dofs.gap = self._moved_gap(t_new)
-                self.solver.update_bounds(*variable_bounds(self.u, self.contact_dofs))
+            if any(p.moving for p in self.contacts):
+                self._move_obstacles(t_new)
             # Signorini with a Jacobian that is factorized once: while nothing touches, a plain
             # Newton step with that factorization is tried first, and the VI (which factorizes
             # its reduced matrix every iteration) runs only when the result would penetrate.
@@ -326,18 +326,23 @@ class QuasistaticProblem:
         self.reports.append(report)
         return report
 
-    def _moved_gap(self, t: float) -> np.ndarray:
-        """The gap at the contact nodes once a moving obstacle has reached its place at ``t``
-        (collective: a ray that misses on one rank stops every rank with the same error)."""
-        message = None
-        try:
-            gap = contact_gap(self.contact, self.contact_dofs, t)
-        except InputError as err:
-            gap, message = None, f"at t = {t:.6g}, where the moving obstacle has gone: {err}"
-        message = next((m for m in self.mesh.comm.allgather(message) if m), None)
-        if message is not None:
-            raise ObstacleOutOfReach(message)
-        return gap
+    def _move_obstacles(self, t: float) -> None:
+        """The gaps at the contact nodes once the moving obstacles have reached their places at
+        ``t``, and the bounds from them (collective: a ray that misses on one rank stops every
+        rank with the same error, naming the part)."""
+        message, part_name = None, None
+        for part in self.contacts:
+            try:
+                part.update(t)
+            except InputError as err:
+                message = f"at t = {t:.6g}, where the moving obstacle has gone: {err}"
+                part_name = part.name
+                break
+        found = next(((m, n) for m, n in self.mesh.comm.allgather((message, part_name)) if m),
+                     None)
+        if found is not None:
+            raise ObstacleOutOfReach(found[0], part=found[1])
+        self.solver.update_bounds(*merged_bounds(self.u, self.contacts))
 
     def _error_ratio(self, u_old: np.ndarray, dt: float, tolerance: float):
         """(local error estimate / (tolerance · max|u_n|), order), or (None, 1) without history."""
@@ -432,16 +437,18 @@ class QuasistaticProblem:
         self._tangent_key = tuple(key) if key is not None else None
         if self.dirichlet.moving:
             self.dirichlet.update(scalars["time"])
-        if isinstance(self.contact, Signorini) and self.contact.moving:
-            self.contact_dofs.gap = contact_gap(self.contact, self.contact_dofs, scalars["time"])
-            self.solver.update_bounds(*variable_bounds(self.u, self.contact_dofs))
+        if any(p.moving for p in self.contacts):
+            for part in self.contacts:
+                part.update(scalars["time"])
+            self.solver.update_bounds(*merged_bounds(self.u, self.contacts))
         self.solver.restore(scalars["solver"], {k[7:]: v for k, v in arrays.items()
                                                 if k.startswith("solver_")})
 
-    def support_forces(self) -> tuple[np.ndarray, np.ndarray]:
-        """(reactions, contact force) at the current state (collective): the force each Dirichlet
-        part exerts on the body, shape (parts, dim), and the total force of the foundation or
-        obstacle on Γ3, shape (dim,) (zero without contact), from the equilibrium residual
+    def support_forces(self, per_part: bool = False) -> tuple[np.ndarray, np.ndarray]:
+        """(reactions, contact force) at the current state (collective): the force each
+        Dirichlet part exerts on the body, shape (parts, dim), and the total force of the
+        obstacles and foundations, shape (dim,) (zero without contact) — with ``per_part`` each
+        contact part's, shape (contact parts, dim) —, from the equilibrium residual
         (σ, ε(v)) - (f, v) (see :mod:`vpcontact.solver.dirichlet`)."""
         if self._equilibrium_vec is None:
             self._equilibrium_vec = fem.petsc.create_vector(self._equilibrium_form)
@@ -453,21 +460,43 @@ class QuasistaticProblem:
         values = vec.array
         reactions = self.dirichlet.reactions(values)
         dim = self.V.dofmap.index_map_bs
-        local = np.zeros(dim)
-        if self._contact_nodes is not None:
-            np.add.at(local, self._contact_nodes % dim, values[self._contact_nodes])
-        return reactions, self.mesh.comm.allreduce(local, op=MPI.SUM)
+        local = np.zeros((len(self.contacts), dim))
+        for i, part in enumerate(self.contacts):
+            np.add.at(local[i], part.force_dofs % dim, values[part.force_dofs])
+        forces = self.mesh.comm.allreduce(local, op=MPI.SUM)
+        return reactions, forces if per_part else forces.sum(axis=0)
+
+    @property
+    def contact_names(self) -> list[str]:
+        """The contact parts' names, in order."""
+        return [p.name for p in self.contacts]
+
+    @property
+    def contact_dofs(self):
+        """The first bounded (Signorini) part's nodes, or None."""
+        part = next((p for p in self.contacts if p.bounded), None)
+        return None if part is None else part.nodes
+
+    @property
+    def contact_monitor(self):
+        """The first bounded (Signorini) part's pressure monitor, or None."""
+        part = next((p for p in self.contacts if p.bounded), None)
+        return None if part is None else part.monitor
+
+    def contact_report(self):
+        """The contact state over every Signorini part, or None without one (collective)."""
+        return merged_report(self.mesh.comm, self.contacts)
 
     def driving_displacement(self) -> Optional[float]:
         """What drives a displacement-controlled run at the current time, signed: the largest
-        component of a moving obstacle's translation d(t) (an indenter pushed down along z
-        gives its negative z), else the mean u_D over the first time-dependent prescribed
-        component (collective); None when nothing moves."""
-        contact = self.contact
+        component of the first moving obstacle's translation d(t) (an indenter pushed down
+        along z gives its negative z), else the mean u_D over the first time-dependent
+        prescribed component (collective); None when nothing moves."""
         t = float(self.time.value)
-        if isinstance(contact, Signorini) and contact.translation is not None:
-            d = np.asarray(contact.translation(t), dtype=float).ravel()
-            return float(d[np.argmax(np.abs(d))]) if d.size else 0.0
+        for part in self.contacts:
+            d = part.driving_displacement(t)
+            if d is not None:
+                return d
         return self.dirichlet.mean_moving_value()
 
     def stress_correction_at_points(self) -> Optional[np.ndarray]:
@@ -487,10 +516,10 @@ class QuasistaticProblem:
         return np.concatenate(dofs), np.concatenate(values)
 
     def _any_contact_active(self) -> bool:
-        if self.contact_dofs is None:
+        bounded = [p for p in self.contacts if p.bounded]
+        if not bounded:
             return False
-        cd = self.contact_dofs
-        local = bool(np.any(cd.normal_displacement(self.u) >= cd.gap - 1e-6 * self.solver.scale))
+        local = any(p.touching(1e-6 * self.solver.scale) for p in bounded)
         return self.mesh.comm.allreduce(local, op=MPI.LOR)
 
     def _check_finite(self, t: float, n: int) -> None:
@@ -510,9 +539,18 @@ def stress_quadrature_degree(mesh, degree: int) -> int:
     return max(2 * (degree - 1), 1)
 
 
-def _unrolled(V, blocks: np.ndarray, exclude: np.ndarray) -> np.ndarray:
-    """Owned unrolled dofs of the nodes ``blocks``, without those in ``exclude``."""
+def _named(contact) -> dict:
+    """The contact argument of :class:`QuasistaticProblem` as a dict part name -> law."""
+    if contact is None:
+        return {}
+    if isinstance(contact, dict):
+        return dict(contact)
+    if isinstance(contact, (list, tuple)):
+        return {f"contact{i + 1}": c for i, c in enumerate(contact)}
+    return {"contact": contact}
+
+
+def _node_dofs(V, blocks: np.ndarray) -> np.ndarray:
+    """Every unrolled dof of the nodes ``blocks``."""
     bs = V.dofmap.index_map_bs
-    blocks = blocks[blocks < V.dofmap.index_map.size_local]
-    dofs = (blocks[:, None] * bs + np.arange(bs)).ravel()
-    return dofs[~np.isin(dofs, exclude)].astype(np.int32)
+    return (np.asarray(blocks, dtype=np.int64)[:, None] * bs + np.arange(bs)).ravel()

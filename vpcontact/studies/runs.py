@@ -75,7 +75,7 @@ class Run:
 
 def _paper_1d(scene) -> Callable[[np.ndarray, float], np.ndarray]:
     from vpcontact.paper import bar1d
-    c = scene.contact
+    c = scene.contact  # the first (the bar has one)
     same = (scene.dim == 1 and scene.law.type == "linear" and scene.material.E == bar1d.YOUNG
             and scene.law.a.value() == bar1d.G_A and scene.law.b.value() == bar1d.G_B
             and c.type == "normal_compliance" and c.mu == bar1d.MU and c.alpha == 1.0

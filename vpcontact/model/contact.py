@@ -1,0 +1,133 @@
+# SPDX-License-Identifier: MIT
+"""Contact parts: the protocol every contact law implements, and what the problem asks of a list
+of them.
+
+A scene may have several contact parts (a specimen between two indenters, a punch on a body that
+rests on a foundation). Each is a :class:`ContactPart` built by its law's ``part`` method
+(:meth:`~vpcontact.model.signorini.Signorini.part`, :meth:`~vpcontact.model.normal_compliance.
+NormalCompliance.part`); the problem composes the list and never asks which law a part has:
+
+* a part with ``bounded = True`` (Signorini) imposes u_ν ≤ g at its nodes as SNES VI bounds,
+  possibly in local frames; the bounds and frames of all such parts are merged here
+  (:func:`merged_bounds`, :func:`merged_frames`);
+* a part with UFL terms (normal compliance) adds them to the residual and the Jacobian.
+
+**Nodes shared by two parts.** A node lies in at most one part: the first listed part that
+reaches it owns it, and later parts leave it out (its constraint, its force, its output row).
+Normal compliance still integrates over all of its own facets, so a shared node gets the
+compliance force of every compliance part whose facets touch it; its *reported* force goes to
+the owner. Two Signorini parts meeting at an edge: the edge nodes are held by the first part's
+obstacle only.
+"""
+
+from __future__ import annotations
+
+from typing import Optional, Protocol, Sequence
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from vpcontact.model.frames import Frames
+
+
+class ContactPart(Protocol):
+    """One contact part of the boundary, at run time.
+
+    Attributes:
+        name: the boundary part's name (outputs: columns, warnings).
+        law: the law's specification (:class:`~vpcontact.model.signorini.Signorini`,
+            :class:`~vpcontact.model.normal_compliance.NormalCompliance`).
+        bounded: the part imposes SNES VI bounds at ``nodes.dofs``.
+        moving: its gaps change with time (a moving obstacle).
+        force_dofs: owned unrolled displacement dofs of its nodes (Dirichlet dofs left out):
+            its force on the body is the equilibrium residual summed over them.
+        node_blocks: owned node (block) indices of its nodes.
+    """
+
+    name: str
+    law: object
+    bounded: bool
+    moving: bool
+    force_dofs: np.ndarray
+    node_blocks: np.ndarray
+
+    def snes_defaults(self, linear_law: bool) -> dict:
+        """SNES options the part needs (e.g. the VI solver), under the user's own."""
+
+    def terms(self, u, du, v, normal, ds) -> Optional[tuple]:
+        """(residual, Jacobian) UFL boundary terms, or None (a bounded part)."""
+
+    @property
+    def nodes(self):
+        """The :class:`~vpcontact.model.signorini.ContactDofs` of the part (normals, gaps)."""
+
+    def update(self, time: float) -> None:
+        """Move the obstacle to its place at ``time`` (new gaps at the nodes)."""
+
+    def pressure(self) -> np.ndarray:
+        """σ_ν at this rank's nodes (collective)."""
+
+    def report(self):
+        """A :class:`~vpcontact.model.signorini.ContactReport` (bounded parts; collective), or
+        None."""
+
+    def touching(self, tolerance: float) -> bool:
+        """Some node of this rank touches (u_ν ≥ g − tolerance)."""
+
+    def driving_displacement(self, time: float) -> Optional[float]:
+        """The signed largest component of the obstacle's translation at ``time``, or None."""
+
+
+def merged_bounds(u, parts: Sequence[ContactPart]) -> Optional[tuple[PETSc.Vec, PETSc.Vec]]:
+    """(lower, upper) for SNES VI from every bounded part (−∞ < ũ < ∞ elsewhere), or None."""
+    bounded = [p for p in parts if p.bounded]
+    if not bounded:
+        return None
+    lower, upper = u.vector.duplicate(), u.vector.duplicate()
+    lower.set(PETSc.NINFINITY)
+    upper.set(PETSc.INFINITY)
+    for part in bounded:
+        cd = part.nodes
+        up = cd.signs > 0
+        upper.array[cd.dofs[up]] = cd.gap[up]
+        lower.array[cd.dofs[~up]] = -cd.gap[~up]
+    for vec in (lower, upper):
+        vec.assemble()
+    return lower, upper
+
+
+def merged_frames(comm, parts: Sequence[ContactPart]) -> Optional[Frames]:
+    """The local frames of every bounded part that works in them (None if none does on any
+    rank; collective)."""
+    framed = [p.nodes.frames for p in parts if p.bounded and p.nodes.rotated]
+    if not comm.allreduce(bool(framed), op=MPI.LOR):
+        return None
+    if not framed:
+        return Frames(np.zeros(0, np.int32), np.zeros((0, 0)), np.zeros(0, np.int32),
+                      np.zeros(0), np.zeros((0, 0, 0)))
+    return Frames(*(np.concatenate([getattr(f, name) for f in framed])
+                    for name in ("nodes", "normals", "slots", "signs", "blocks")))
+
+
+def merged_report(comm, parts: Sequence[ContactPart]):
+    """One :class:`~vpcontact.model.signorini.ContactReport` over the bounded parts (active
+    nodes summed, extremes over parts, forces summed), or None without one (collective)."""
+    reports = [r for r in (p.report() for p in parts) if r is not None]
+    if not reports:
+        return None
+    from vpcontact.model.signorini import ContactReport
+    return ContactReport(
+        active=sum(r.active for r in reports),
+        max_penetration=max(r.max_penetration for r in reports),
+        min_pressure=min(r.min_pressure for r in reports),
+        max_pressure=max(r.max_pressure for r in reports),
+        complementarity=max(r.complementarity for r in reports),
+        normal_force=sum(r.normal_force for r in reports))
+
+
+def unrolled(bs: int, blocks: np.ndarray, exclude: np.ndarray) -> np.ndarray:
+    """The unrolled dofs of the node ``blocks`` (block size ``bs``), without those in
+    ``exclude``."""
+    dofs = (np.asarray(blocks, dtype=np.int64)[:, None] * bs + np.arange(bs)).ravel()
+    return dofs[~np.isin(dofs, exclude)].astype(np.int32)
