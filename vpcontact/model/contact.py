@@ -39,6 +39,8 @@ class ContactPart(Protocol):
         law: the law's specification (:class:`~vpcontact.model.signorini.Signorini`,
             :class:`~vpcontact.model.normal_compliance.NormalCompliance`).
         bounded: the part imposes SNES VI bounds at ``nodes.dofs``.
+        driven: its obstacle is pressed by a force and its displacement is an unknown (then it
+            is a :class:`~vpcontact.solver.variables.DrivenUnknown` too).
         moving: its gaps change with time (a moving obstacle).
         force_dofs: owned unrolled displacement dofs of its nodes (Dirichlet dofs left out):
             its force on the body is the equilibrium residual summed over them.
@@ -48,6 +50,7 @@ class ContactPart(Protocol):
     name: str
     law: object
     bounded: bool
+    driven: bool
     moving: bool
     force_dofs: np.ndarray
     node_blocks: np.ndarray
@@ -64,6 +67,18 @@ class ContactPart(Protocol):
 
     def update(self, time: float) -> None:
         """Move the obstacle to its place at ``time`` (new gaps at the nodes)."""
+
+    def bound_gaps(self) -> np.ndarray:
+        """Bounded parts: the right-hand sides of their bounds at ``nodes.dofs``."""
+
+    def commit(self, time: float) -> None:
+        """The step to ``time`` is accepted."""
+
+    def state(self) -> dict:
+        """What a checkpoint must hold to continue (JSON-able; {} for most parts)."""
+
+    def restore(self, state: dict, time: float) -> None:
+        """Continue from :meth:`state` at ``time``."""
 
     def pressure(self) -> np.ndarray:
         """σ_ν at this rank's nodes (collective)."""
@@ -88,10 +103,10 @@ def merged_bounds(u, parts: Sequence[ContactPart]) -> Optional[tuple[PETSc.Vec, 
     lower.set(PETSc.NINFINITY)
     upper.set(PETSc.INFINITY)
     for part in bounded:
-        cd = part.nodes
+        cd, gap = part.nodes, part.bound_gaps()
         up = cd.signs > 0
-        upper.array[cd.dofs[up]] = cd.gap[up]
-        lower.array[cd.dofs[~up]] = -cd.gap[~up]
+        upper.array[cd.dofs[up]] = gap[up]
+        lower.array[cd.dofs[~up]] = -gap[~up]
     for vec in (lower, upper):
         vec.assemble()
     return lower, upper

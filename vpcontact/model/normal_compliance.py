@@ -160,6 +160,7 @@ class CompliancePart:
     first use, through the foundation's surface: :attr:`NormalCompliance.surface`)."""
 
     bounded = False
+    driven = False
     moving = False
 
     def __init__(self, law: NormalCompliance, u, facet_tags, name: str, exclude: np.ndarray):
@@ -196,6 +197,15 @@ class CompliancePart:
         return (self.law.residual(u, v, normal, ds), self.law.jacobian(u, du, v, normal, ds))
 
     def update(self, time: float) -> None:
+        pass
+
+    def commit(self, time: float) -> None:
+        pass
+
+    def state(self) -> dict:
+        return {}
+
+    def restore(self, state: dict, time: float) -> None:
         pass
 
     def pressure(self) -> np.ndarray:

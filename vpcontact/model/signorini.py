@@ -48,6 +48,11 @@ class Signorini:
             orthogonal matrix), applied before the translation: the obstacle at t is
             {x : φ(c + Q(t)ᵀ(x − c − d(t))) ≤ 0}; None: it does not turn.
         rotation_center: the point c the rotation turns about (3 coordinates).
+        force: F(t) (t -> (dim,) array), the force pressing the obstacle on the body, instead
+            of a prescribed motion: the obstacle translates by an unknown d along
+            ``force_direction`` e, solved with u so that the contact force balances F(t) · e
+            (see :class:`DrivenSignoriniPart`); F(t) = |F(t)| e with |F(t)| > 0 for t > 0.
+        force_direction: e, the unit vector F(t) keeps (3 coordinates).
     """
 
     tag: int
@@ -58,6 +63,8 @@ class Signorini:
     translation: Optional[Callable[[float], np.ndarray]] = None
     rotation: Optional[Callable[[float], np.ndarray]] = None
     rotation_center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    force: Optional[Callable[[float], np.ndarray]] = None
+    force_direction: Optional[tuple[float, float, float]] = None
 
     def __post_init__(self):
         if isinstance(self.gap, (int, float)) and not (math.isfinite(self.gap) and self.gap >= 0):
@@ -68,14 +75,16 @@ class Signorini:
     def moving(self) -> bool:
         """Whether the gap changes with time."""
         return self.obstacle is not None and (self.obstacle_moves or self.translation is not None
-                                              or self.rotation is not None)
+                                              or self.rotation is not None
+                                              or self.force is not None)
 
     def part(self, u: fem.Function, facet_tags, equilibrium, name: str = "contact",
              exclude: np.ndarray = np.zeros(0, dtype=np.int32),
              rotate: Optional[bool] = None) -> "SignoriniPart":
         """This condition on the mesh of ``u``: a :class:`~vpcontact.model.contact.ContactPart`
         (see :class:`SignoriniPart`)."""
-        return SignoriniPart(self, u, facet_tags, equilibrium, name, exclude, rotate)
+        kind = SignoriniPart if self.force is None else DrivenSignoriniPart
+        return kind(self, u, facet_tags, equilibrium, name, exclude, rotate)
 
     def obstacle_at(self, time: float) -> LevelSet:
         """The obstacle's level set at ``time``, as a function of points (3, N)."""
@@ -418,6 +427,8 @@ class _VertexPressure:
 class SignoriniPart:
     """A Signorini contact part at run time (a :class:`~vpcontact.model.contact.ContactPart`):
     its nodes and bounded dofs, the gap of a moving obstacle, the nodal pressure and the report.
+    Its obstacle stays where it is or moves as prescribed (see :class:`DrivenSignoriniPart`
+    for one pressed by a force).
 
     Args:
         law: the condition.
@@ -430,6 +441,7 @@ class SignoriniPart:
     """
 
     bounded = True
+    driven = False
 
     def __init__(self, law: Signorini, u: fem.Function, facet_tags, equilibrium, name: str,
                  exclude: np.ndarray, rotate: Optional[bool]):
@@ -462,6 +474,21 @@ class SignoriniPart:
         if self.moving:
             self._nodes.gap = contact_gap(self.law, self._nodes, time)
 
+    def bound_gaps(self) -> np.ndarray:
+        """The right-hand sides of the bounds u_ν ≤ g at the nodes."""
+        return self._nodes.gap
+
+    def commit(self, time: float) -> None:
+        """The step to ``time`` is accepted."""
+
+    def state(self) -> dict:
+        """What a checkpoint must hold to continue (JSON-able)."""
+        return {}
+
+    def restore(self, state: dict, time: float) -> None:
+        """Continue from :meth:`state` at ``time``."""
+        self.update(time)
+
     def pressure(self) -> np.ndarray:
         return self.monitor.nodal_pressure()
 
@@ -477,3 +504,153 @@ class SignoriniPart:
             return None
         d = np.asarray(self.law.translation(time), dtype=float).ravel()
         return float(d[np.argmax(np.abs(d))]) if d.size else 0.0
+
+
+class DrivenSignoriniPart(SignoriniPart):
+    """A rigid obstacle pressed on the body by a force F(t) = F(t) e: it translates by d along
+    e, an unknown of each step solved with u (see :mod:`vpcontact.solver.variables`), so that
+    the contact force on it balances F(t).
+
+    Over a step the gaps are linear in the unknown δ = d − d_p (:attr:`increment`; d_p the d
+    predicted from the last two steps): g_i(d) ≈ g_i(d_p) + (e · ν_i) δ, g_i(d_p) by ray
+    casting. The coefficient e · ν_i makes the obstacle's own equation the balance of the
+    contact forces along e, Σ σ_ν,i ν_i · e = F(t) · e, exactly (to solver tolerance). It is
+    the gap's exact sensitivity ∂g_i/∂d where the contact face is normal to e (any obstacle);
+    where the face turns by θ from that (a curved body on a plane) the linearization is off by
+    |δ| O(θ²) per step. The obstacle starts touching the body: at set-up it is moved along e
+    until the first node's gap closes (a force on an obstacle in free flight has no
+    equilibrium).
+    """
+
+    driven = True
+
+    def __init__(self, law: Signorini, u, facet_tags, equilibrium, name: str, exclude, rotate):
+        super().__init__(law, u, facet_tags, equilibrium, name, exclude, rotate)
+        e = np.zeros(3)
+        e[:len(law.force_direction)] = law.force_direction
+        self._e = e / np.linalg.norm(e)
+        V = u.function_space
+        self._bs = V.dofmap.index_map_bs
+        cd = self._nodes
+        self._slopes = cd.normals @ self._e[:cd.normals.shape[1]]  # e · ν_i
+        if cd.unreachable is not None:
+            self._slopes[cd.unreachable] = 0.0  # (no contact there)
+        extent = np.ptp(V.mesh.geometry.x, axis=0).max()
+        self._delta = 1e-6 * self.comm.allreduce(float(extent), op=MPI.MAX)
+        self._time = 0.0
+        self.increment = 0.0
+        self._predicted = self._touching_displacement()
+        self._committed = [(0.0, self._predicted)]  # the last two accepted (t, d)
+        self._linearize(self._predicted)
+
+    @property
+    def displacement(self) -> float:
+        """d = d_p + δ at the current iterate."""
+        return self._predicted + self.increment
+
+    # -- the gaps as functions of d ---------------------------------------------------------
+    def _gaps_at(self, d: float) -> np.ndarray:
+        cd = self._nodes
+        normals = np.zeros((len(cd.points), 3))
+        normals[:, :cd.normals.shape[1]] = cd.normals
+        phi = self.law.obstacle
+        shifted = lambda x: phi(np.asarray(x, dtype=np.float64) - d * self._e[:, None])  # noqa: E731
+        return gap_along_normal(shifted, cd.points, normals, max_distance=self.law.max_distance,
+                                signed=True, check_side=False, may_miss=cd.unreachable)
+
+    def _touching_displacement(self) -> float:
+        """The d at which the obstacle, moved along e, first touches a node (collective)."""
+        d = 0.0
+        for _ in range(60):
+            gaps = self._gaps_at(d)
+            reach = ~self._nodes.unreachable if self._nodes.unreachable is not None else None
+            local = gaps[reach] if reach is not None else gaps
+            i = int(np.argmin(local)) if len(local) else -1
+            g = float(local[i]) if len(local) else np.inf
+            slope = 0.0
+            if len(local):
+                ahead, behind = (self._gaps_at(d + self._delta), self._gaps_at(d - self._delta))
+                rows = np.flatnonzero(reach) if reach is not None else np.arange(len(gaps))
+                slope = float(ahead[rows[i]] - behind[rows[i]]) / (2 * self._delta)
+            g_min, slope = min(self.comm.allgather((g, slope)))
+            if g_min <= 1e-12 * max(1.0, abs(d), self._delta * 1e6):
+                return d
+            if not slope < 0:
+                raise InputError(f"the force's direction {self._e[:self._bs].round(12).tolist()} "
+                                 "moves the obstacle away from the contact part (the force must "
+                                 "press it on the body)", key="contact.force")
+            d -= g_min / slope
+        raise InputError("the obstacle cannot be brought into contact along the force's "
+                         "direction", key="contact.force")
+
+    def _linearize(self, d: float) -> None:
+        """The gaps at d = d_p (the bounds: u_ν − (e · ν) δ ≤ g(d_p))."""
+        self._predicted, self.increment = d, 0.0
+        self._nodes.gap = self._gaps_at(d)
+        self._bound = self._nodes.gap.copy()
+
+    # -- the part's protocol ----------------------------------------------------------------
+    def update(self, time: float) -> None:
+        """Predict d at ``time`` from the last two accepted steps and linearize about it."""
+        (t1, d1), (t0, d0) = self._committed[-1], self._committed[0]
+        d = d1 if t1 == t0 else d1 + (time - t1) / (t1 - t0) * (d1 - d0)
+        self._time = time
+        self._linearize(d)
+
+    def bound_gaps(self) -> np.ndarray:
+        return self._bound
+
+    def column(self) -> tuple[np.ndarray, np.ndarray]:
+        """(owned unrolled dofs, values): u changes by (e · ν_i) ν_i per unit of δ at node i."""
+        cd = self._nodes
+        if cd.axis is not None:
+            return cd.dofs, self._slopes * cd.sign
+        dofs = (cd.nodes[:, None] * self._bs + np.arange(self._bs)).ravel().astype(np.int32)
+        return dofs, (self._slopes[:, None] * cd.normals).ravel()
+
+    def bounded_dofs(self) -> np.ndarray:
+        """The bounded entries (w̃'s normal slots) of this rank's nodes."""
+        return self._nodes.dofs
+
+    def refit(self, tolerance: float) -> bool:
+        """After a solve: if the linearized gaps g(d_p) + (e · ν) δ differ from the ray-cast gaps
+        at the solved d by more than ``tolerance`` (a length) at some node in contact or within
+        that difference of contact, linearize about d
+        (the step is then solved again from where it is; the difference shrinks by about θ²
+        per round, θ the face's turn from the normal to e). Collective; True if it did."""
+        gaps = self._gaps_at(self.displacement)
+        linear = self._bound + self._slopes * self.increment
+        error = np.abs(gaps - linear)
+        # the nodes whose contact the error could decide: in contact, or within it of contact
+        clearance = np.minimum(gaps, linear) - self._nodes.normal_displacement(self.u)
+        near = clearance <= error + tolerance
+        if self._nodes.unreachable is not None:
+            near &= ~self._nodes.unreachable
+        local = float(np.max(error[near], initial=0.0))
+        if self.comm.allreduce(local, op=MPI.MAX) <= tolerance:
+            return False
+        self._linearize(self.displacement)
+        return True
+
+    def applied_force(self) -> float:
+        """F(t) · e at the step's time."""
+        force = np.zeros(3)
+        value = np.asarray(self.law.force(self._time), dtype=np.float64).ravel()
+        force[:len(value)] = value
+        return float(force @ self._e)
+
+    def commit(self, time: float) -> None:
+        self._committed = (self._committed + [(time, self.displacement)])[-2:]
+        self._nodes.gap = self._gaps_at(self.displacement)  # where the obstacle is now
+
+    def state(self) -> dict:
+        return {"committed": [list(c) for c in self._committed]}
+
+    def restore(self, state: dict, time: float) -> None:
+        self._committed = [tuple(c) for c in state["committed"]]
+        self._time = time
+        self._linearize(self._committed[-1][1])
+
+    def driving_displacement(self, time: float) -> Optional[float]:
+        d = self.displacement * self._e
+        return float(d[np.argmax(np.abs(d))])

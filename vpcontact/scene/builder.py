@@ -11,6 +11,7 @@ the vertices) are reported with their place in the scene file.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Dict, Optional
 
@@ -328,6 +329,12 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
             g = gap.ufl(ufl.SpatialCoordinate(mesh), 0.0)
             surface = Signorini(tag, gap=lambda x: gap.numpy(x))
         return NormalCompliance(tag, mu=spec.mu, alpha=spec.alpha, gap=g, surface=surface)
+    if spec.obstacle is not None and spec.force is not None:
+        phi, _ = obstacle_level_set(spec, scene.dim)
+        force = spec.force
+        return Signorini(tag, obstacle=phi, max_distance=spec.max_distance or 1e3,
+                         force=lambda t: np.array([e.value(t) for e in force]),
+                         force_direction=_force_direction(scene, force))
     if spec.obstacle is not None:
         phi, moves = obstacle_level_set(spec, scene.dim)
         motion = spec.motion
@@ -344,6 +351,32 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
     if gap is None or gap.is_constant:
         return Signorini(tag, gap=0.0 if gap is None else gap.value())
     return Signorini(tag, gap=lambda x: gap.numpy(x))
+
+
+def _force_direction(scene: Scene, force) -> tuple:
+    """The fixed direction e of a force F(t) = |F(t)| e that presses an obstacle: F is checked
+    at t = 0 and at the step times (at most 256 of them, evenly spread): parallel to one e, in
+    its sense, and nonzero for t > 0 (with no force the obstacle has no equilibrium)."""
+    steps = max(1, int(math.ceil(scene.time.T / scene.time.k - 1e-9)))
+    times = np.linspace(0.0, scene.time.T, min(steps, 256) + 1)
+    values = np.array([[e.value(t) for e in force] for t in times])
+    sizes = np.linalg.norm(values, axis=1)
+    largest = int(np.argmax(sizes))
+    if sizes[largest] == 0:
+        raise InputError("the force is zero at every step: an obstacle driven by a force needs "
+                         "one (use a motion to hold it)", key="contact.force")
+    direction = values[largest] / sizes[largest]
+    for t, value, size in zip(times, values, sizes):
+        if t > 0 and size == 0:
+            raise InputError(f"the force is zero at t = {t:g}: an obstacle driven by a force "
+                             "must be pressed at every t > 0 (it has no equilibrium otherwise)",
+                             key="contact.force")
+        if np.linalg.norm(value - (value @ direction) * direction) > 1e-9 * size or (
+                value @ direction < 0):
+            raise InputError(f"the force turns: at t = {t:g} it is {value.tolist()}, not along "
+                             f"{direction.round(12).tolist()} (an obstacle driven by a force "
+                             "translates along one fixed direction)", key="contact.force")
+    return tuple(direction) + (0.0,) * (3 - len(direction))
 
 
 def _foundation_gap(mesh, facet_tags, surface: Signorini):

@@ -49,6 +49,8 @@ def check_finite(scene: Scene, mesh, part_tags, facet_tags) -> None:
             single.append(f"{where}.gap")
         if contact.motion is not None:
             checks.append((f"{where}.motion", contact.motion, np.zeros((3, 1))))
+        if contact.force is not None:
+            checks.append((f"{where}.force", contact.force, np.zeros((3, 1))))
         if contact.rotation is not None:
             checks.append((f"{where}.rotation.angle", (contact.rotation.angle,),
                            np.zeros((3, 1))))

@@ -19,8 +19,8 @@ from vpcontact.scene.specs import SHAPES, ContactSpec, LawSpec, ObstacleRotation
 __all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contacts", "read_law"]
 
 LAW_KEYS = ("type", "scheme", "sigma_y", "mu_star", "yield_set", "a", "b")
-CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "motion", "rotation", "max_distance", "mu",
-                "alpha")
+CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "motion", "rotation", "force",
+                "max_distance", "mu", "alpha")
 ROTATION_KEYS = ("center", "angle", "axis")
 LAW_TYPES = ("elastic", "perzyna", "linear")
 SCHEMES = ("explicit", "implicit")
@@ -122,14 +122,20 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
         if t.has("gap"):
             t.add("gap", "give either gap or obstacle, not both")
         if kind == "normal_compliance":
-            for key in ("motion", "rotation"):
+            for key in ("motion", "rotation", "force"):
                 t.forbid(key, "a foundation surface stays where it is (moving obstacles are "
                               "for type = 'signorini')")
-        obstacle = _obstacle(t, dim, moving=kind == "signorini")
+        if t.has("force"):
+            for key in ("motion", "rotation"):
+                t.forbid(key, "an obstacle driven by a force moves along the force (give "
+                              "either force or a prescribed motion)")
+        obstacle = _obstacle(t, dim, moving=kind == "signorini" and not t.has("force"))
         moves = kind == "signorini"
         motion = t.exprs("motion", ("t",), dim, dim) if t.has("motion") and moves else None
         rotation = _rotation(t, dim) if t.has("rotation") and moves else None
+        force = t.exprs("force", ("t",), dim, dim) if t.has("force") and moves else None
         return ContactSpec(kind, boundary, obstacle=obstacle, motion=motion, rotation=rotation,
+                           force=force,
                            max_distance=t.number("max_distance", DEFAULT_MAX_DISTANCE,
                                                  check=greater(0)),
                            mu=t.number("mu", check=greater(0)) if kind != "signorini" else None,
@@ -138,6 +144,7 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     t.forbid("max_distance", "only with an obstacle")
     t.forbid("motion", "only with an obstacle")
     t.forbid("rotation", "only with an obstacle")
+    t.forbid("force", "only with an obstacle")
     if kind == "signorini":
         return ContactSpec(kind, boundary, gap=_gap(t, dim))
     return ContactSpec(kind, boundary, gap=_gap(t, dim), mu=t.number("mu", check=greater(0)),

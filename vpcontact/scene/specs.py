@@ -206,6 +206,9 @@ class ContactSpec:
         motion: rigid translation d(t) of the obstacle (one expression of t per component), or
             ``None``.
         rotation: rigid rotation of the obstacle (:class:`ObstacleRotation`), or ``None``.
+        force: the force F(t) pressing a Signorini obstacle on the body (one expression of t per
+            component) instead of a motion: it translates along F by an unknown amount that
+            balances F; or ``None``.
         max_distance: longest ray searched for the obstacle (with an obstacle only).
         mu: deformability μ of the foundation (normal compliance only).
         alpha: exponent α of normal compliance (normal compliance only).
@@ -217,6 +220,7 @@ class ContactSpec:
     obstacle: Expression | ObstacleShape | None = None
     motion: tuple[Expression, ...] | None = None
     rotation: ObstacleRotation | None = None
+    force: tuple[Expression, ...] | None = None
     max_distance: float | None = None
     mu: float | None = None
     alpha: float | None = None

@@ -120,7 +120,7 @@ def dump(scene: Any) -> str:
         entries = {
             "type": contact.type, "boundary": contact.boundary, "gap": contact.gap,
             "obstacle": contact.obstacle, "motion": contact.motion,
-            "rotation": contact.rotation,
+            "rotation": contact.rotation, "force": contact.force,
             "max_distance": contact.max_distance, "mu": contact.mu,
             "alpha": contact.alpha}
         if scene.contact_array:

@@ -104,7 +104,9 @@ class DirichletParts:
             taken = (np.concatenate(self.part_dofs) if self.part_dofs
                      else np.zeros(0, np.int32))
             blocks = fem.locate_dofs_topological(V, fdim, facets)
-            if part.all_zero and not np.isin(blocks[:, None] * dim + np.arange(dim), taken).any():
+            overlap = mesh.comm.allreduce(  # (collective: the branches below differ in MPI calls)
+                bool(np.isin(blocks[:, None] * dim + np.arange(dim), taken).any()), op=MPI.LOR)
+            if part.all_zero and not overlap:
                 # All components zero: one blocked condition (the clamped Γ1 of the paper).
                 self.bcs.append(fem.dirichletbc(np.zeros(dim, dtype=np.float64), blocks, V))
                 self.part_dofs.append(self.bcs[-1].dof_indices()[0].astype(np.int32))

@@ -30,6 +30,7 @@ from petsc4py import PETSc
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor, past_nodes
 from vpcontact.errors import InputError, NonFiniteStateError, ObstacleOutOfReach, StepRejected
 from vpcontact.solver.step_solver import StepSolver
+from vpcontact.solver.variables import ChangeOfVariables
 from vpcontact.model.fields import Displacement, DisplacementPressure
 from vpcontact.model.locking import check_formulation, locks
 from vpcontact.model.quadrature import QuadratureState
@@ -39,6 +40,12 @@ from vpcontact.solver.bdf2 import Bdf2, check_time_scheme
 from vpcontact.solver.dirichlet import Dirichlet, DirichletParts
 from vpcontact.solver.loads import Loads, PointDofs, as_vector
 from vpcontact.model.tensors import as_mandel_matrix, as_mandel_vector, mandel_strain
+
+#: Obstacles driven by a force: the linearized gaps' largest error accepted, relative to the
+#: mesh's extent, and the re-solves allowed per step to reach it.
+REFIT_TOLERANCE = 1e-10
+MAX_REFITS = 4
+
 
 @dataclass
 class StepReport:
@@ -202,20 +209,26 @@ class QuasistaticProblem:
         # Unknown scale for SNES: an exact power of two far below any displacement of interest.
         extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
         scale = 2.0 ** (np.floor(np.log2(extent)) - 40)
+        self._extent = extent
         self._point_loads = [PointDofs(self.V, p) for p in loads.points]
         # Only what is called for: a constitutive update linear in ε with no compliance term
         # has a Jacobian that changes with the step size only; it is factorized once per size.
-        constant_jacobian = law.linear_in_strain and not terms
+        # (an obstacle driven by a force changes the unknowns' map P at every step)
+        constant_jacobian = (law.linear_in_strain and not terms
+                             and not any(p.driven for p in self.contacts))
         self.fields.compile(residual, jacobian)
         rotation = None
         frames = merged_frames(mesh.comm, self.contacts)
         if frames is not None:
             rotation = rotation_matrix(self.V, frames, self.fields)
+        driven = [p for p in self.contacts if getattr(p, "driven", False)]
+        self.variables = (None if rotation is None and not driven else
+                          ChangeOfVariables(self.fields, rotation, driven, scale))
         self.solver = StepSolver(self.fields, self.bcs, self._update_stress,
                                  options, options_prefix, scale=scale,
                                  load=sum(external[1:], external[0]) if external else None,
                                  point_forces=self._point_forces if self._point_loads else None,
-                                 constant_jacobian=constant_jacobian, rotation=rotation,
+                                 constant_jacobian=constant_jacobian, variables=self.variables,
                                  linear=linear)
         bounds = merged_bounds(self.u, self.contacts)
         if bounds is not None:
@@ -299,6 +312,7 @@ class QuasistaticProblem:
             # With a nonlinear law every iteration factorizes anyway; the VI costs no more.
             free_first = self.solver.constant_jacobian and not self._contact_active
             its = self.solver.solve(t_new, n, try_unconstrained=free_first)
+            its += self._refit_driven(t_new, n)
             self._check_finite(t_new, n)
             ratio, order = (None, 1)
             if tolerance is not None:
@@ -315,6 +329,8 @@ class QuasistaticProblem:
         if self._bdf2 is not None:
             self._bdf2.accept(self.state, dt)  # before the commit: it keeps w at t_{n-1}
         self.state.commit()
+        for part in self.contacts:
+            part.commit(t_new)
         if hasattr(self.law, "commit"):  # laws with internal variables of their own
             self.law.commit()
         self._contact_active = self._any_contact_active()
@@ -325,6 +341,20 @@ class QuasistaticProblem:
         report = StepReport(n, t_new, its, self.solver.last_reason, ratio, order)
         self.reports.append(report)
         return report
+
+    def _refit_driven(self, t: float, n: int) -> int:
+        """Obstacles driven by a force: solve again, linearized about the solved d, while the
+        linearized gaps are off by more than REFIT_TOLERANCE × the mesh's extent (see
+        :meth:`~vpcontact.model.signorini.DrivenSignoriniPart.refit`); the Newton iterations."""
+        driven = [p for p in self.contacts if p.driven]
+        its = 0
+        for _ in range(MAX_REFITS):
+            if not any([p.refit(REFIT_TOLERANCE * self._extent) for p in driven]):
+                break
+            self.variables.refresh()
+            self.solver.update_bounds(*merged_bounds(self.u, self.contacts))
+            its += self.solver.solve(t, n)
+        return its
 
     def _move_obstacles(self, t: float) -> None:
         """The gaps at the contact nodes once the moving obstacles have reached their places at
@@ -342,6 +372,8 @@ class QuasistaticProblem:
                      None)
         if found is not None:
             raise ObstacleOutOfReach(found[0], part=found[1])
+        if self.variables is not None:
+            self.variables.refresh()
         self.solver.update_bounds(*merged_bounds(self.u, self.contacts))
 
     def _error_ratio(self, u_old: np.ndarray, dt: float, tolerance: float):
@@ -401,7 +433,7 @@ class QuasistaticProblem:
                    "dt_prev": self._dt_prev, "dt_prev2": self._dt_prev2,
                    "contact_active": self._contact_active, "tangent_key": self._tangent_key,
                    "bdf2_dt_prev": self._bdf2.dt_prev if self._bdf2 is not None else None,
-                   "solver": solver_flags}
+                   "solver": solver_flags, "contacts": [p.state() for p in self.contacts]}
         return scalars, {k: np.asarray(v) for k, v in arrays.items()}
 
     def restore(self, scalars: dict, arrays: dict) -> None:
@@ -437,9 +469,11 @@ class QuasistaticProblem:
         self._tangent_key = tuple(key) if key is not None else None
         if self.dirichlet.moving:
             self.dirichlet.update(scalars["time"])
+        for part, state in zip(self.contacts, scalars.get("contacts", [{}] * len(self.contacts))):
+            part.restore(state, scalars["time"])
+        if self.variables is not None:
+            self.variables.refresh()
         if any(p.moving for p in self.contacts):
-            for part in self.contacts:
-                part.update(scalars["time"])
             self.solver.update_bounds(*merged_bounds(self.u, self.contacts))
         self.solver.restore(scalars["solver"], {k[7:]: v for k, v in arrays.items()
                                                 if k.startswith("solver_")})

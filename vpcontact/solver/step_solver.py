@@ -20,7 +20,7 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact.errors import ConvergenceError
+from vpcontact.errors import ConvergenceError, InputError
 from vpcontact.solver import linear as linear_solvers
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
                                           rejected_option)
@@ -52,10 +52,12 @@ class StepSolver:
         constant_jacobian: the Jacobian depends on the step size only (a constitutive update
             linear in ε and no nonlinear contact term): it is assembled once per step size and
             the linear solver's factorization is reused across iterations and steps.
-        rotation: orthogonal R (laid out like the SNES vector) of a change of variables
-            u = R ũ: SNES then solves Rᵀ F(R ũ) = 0 with Jacobian Rᵀ J R (:meth:`Mat.PtAP`),
-            bounds apply to ũ (local frames at contact nodes, :mod:`vpcontact.model.frames`).
-            Dirichlet rows must be left alone by R. None: SNES works on u itself.
+        variables: a change of variables u = P x̃ (:class:`~vpcontact.solver.variables.
+            ChangeOfVariables`: local frames at contact nodes, and the displacements of
+            obstacles driven by a force appended to the unknowns): SNES then solves
+            Pᵀ F(P x̃) = 0 (less the driving forces) with Jacobian Pᵀ J P (:meth:`Mat.PtAP`),
+            bounds apply to x̃. Dirichlet rows must be left alone by P. None: SNES works on u
+            itself.
         linear: "direct", "iterative" or "auto" (by size), see :mod:`vpcontact.solver.linear`;
             user options (``ksp_*``, ``pc_*``, ``lagged_*``) override its choices.
     """
@@ -64,7 +66,7 @@ class StepSolver:
                  refresh: Callable[[], None], petsc_options: Optional[dict] = None,
                  options_prefix: Optional[str] = None, scale: float = 1.0, load=None,
                  point_forces: Optional[Callable[[], tuple]] = None,
-                 constant_jacobian: bool = False, rotation: Optional[PETSc.Mat] = None,
+                 constant_jacobian: bool = False, variables=None,
                  linear: str = "direct"):
         if not scale > 0:
             raise ValueError(f"scale must be > 0, got {scale}")
@@ -74,7 +76,9 @@ class StepSolver:
         u = self.u
         self.bcs = list(bcs)
         self._refresh = refresh
-        self._b = fields.create_vector()
+        self._P = variables
+        driven = variables is not None and not variables.square
+        self._b = variables.create_vector() if driven else fields.create_vector()
         self._xp = fields.physical_vector()  # the physical unknowns (u's own vector for u alone)
         self._columns = fields.column_scales(self.scale)  # None: every column scaled by scale
         self._load = fem.form(load) if load is not None else None
@@ -90,14 +94,14 @@ class StepSolver:
         self._restored_jacobian_dt: Optional[float] = None  # the same before a restart
         self.dt = 0.0  # set by the owner before each solve (only the constant-Jacobian reuse reads it)
         self._A = fields.create_matrix()
-        self._R = rotation
-        self._b_phys = self._A_phys = None  # physical-frame residual and Jacobian (with R)
-        if rotation is not None:
+        self._b_phys = self._A_phys = None  # physical residual and Jacobian (with P)
+        if variables is not None:
             self._b_phys = fields.create_vector()
             self._A_phys = self._A
             fields.assemble_jacobian(self._A_phys, self.bcs)  # a pattern for PtAP
-            self._A = self._A_phys.PtAP(rotation)
-        self._x = fields.create_vector()
+            self._A = variables.jacobian(self._A_phys)
+        self._x = variables.create_vector() if driven else fields.create_vector()
+        self._xs = None  # scratch: the physical unknowns in SNES units (with P)
         comm = u.function_space.mesh.comm
         self.prefix = options_prefix or f"vpcontact_step_{next(_counter)}_"
 
@@ -109,12 +113,15 @@ class StepSolver:
         self._modes = None  # rigid-body modes (in the SNES layout), for multigrid
         self._block = None  # the fieldsplit set-up of the mixed formulation
         defaults = dict(DEFAULT_OPTIONS)
+        if self.linear == "iterative" and driven:
+            raise InputError("an obstacle driven by a force needs the direct linear solver "
+                             "(linear = \"direct\")", key="solver.linear")
         if self.linear == "iterative":
             defaults.update(linear_solvers.iterative_options(mixed))
             defaults.update({"lagged_" + k: v
                              for k, v in linear_solvers.lagged_options(mixed).items()})
             defaults["vpcontact_vi_linear"] = "lagged_gamg"
-            self._modes = rigid_body_modes(u.function_space, rotation, layout=fields)
+            self._modes = rigid_body_modes(u.function_space, variables, layout=fields)
             if mixed:
                 self._block = linear_solvers.BlockPreconditioner(fields, self._modes, self.scale)
             else:
@@ -130,6 +137,10 @@ class StepSolver:
         self.lagged_lu: Optional[LaggedDirectSolve | LaggedMultigrid] = None
         self._free_snes: Optional[PETSc.SNES] = None  # unconstrained Newton of a VI problem
         self._bounds = None
+        self._last_active: Optional[np.ndarray] = None  # the last solve's active bounds
+        mesh = self.u.function_space.mesh
+        self._extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()),
+                                           op=MPI.MAX)
         self._fnorm0 = 0.0
         self._loaded = self._x.duplicate()  # the iterate whose refresh is current
         self._loaded_valid = False
@@ -220,6 +231,11 @@ class StepSolver:
         vec = self.fields.embed(vec_u, fill)
         if vec.handle != vec_u.handle:
             vec_u.destroy()
+        if self._P is not None:
+            full = self._P.extend(vec, fill)
+            if full.handle != vec.handle:
+                vec.destroy()
+            vec = full
         return vec
 
     def update_bounds(self, lower: PETSc.Vec, upper: PETSc.Vec) -> None:
@@ -266,7 +282,7 @@ class StepSolver:
             self.lagged_lu = LaggedDirectSolve(self.snes, self._A, self.prefix + "lagged_", inner)
             self.lagged_lu.lag_allowed = self._lag_allowed
         else:
-            modes = self._modes or rigid_body_modes(self.u.function_space, self._R,
+            modes = self._modes or rigid_body_modes(self.u.function_space, self._P,
                                                     layout=self.fields)
             self.lagged_lu = LaggedMultigrid(self.snes, self._A, self.prefix + "lagged_", modes,
                                              inner)
@@ -292,6 +308,39 @@ class StepSolver:
         substitutions, a net loss of 30-45 %."""
         return (self.constant_jacobian or self.snes.getIterationNumber() == 0
                 or self.snes.getFunctionNorm() <= self._lag_below * self._fnorm0)
+
+    #: Entries of the initial guess this close to a bound (a length relative to the mesh's
+    #: extent) start on it.
+    SNAP = 1e-9
+
+    def _snap_to_bounds(self, x: PETSc.Vec) -> None:
+        """Start SNES VI with the last step's active set: an entry that ended the last solve on a
+        bound starts on that bound (which may have moved), and so does an entry within
+        :data:`SNAP` × the mesh's extent of a bound. SNES VI takes a bound as active only
+        within 1e-8 in x's units (about 1e-20 of the extent), which a contact node predicted
+        by extrapolation misses when its bound moves (an obstacle with a motion, or driven by
+        a force); an obstacle driven by a force whose nodes are all inactive has no
+        equilibrium (a singular Jacobian). Entries whose residual pulls them off the bound
+        are released by the VI itself."""
+        array = x.getArray()
+        near = self.SNAP * self._extent / self.scale  # in x's units
+        for side, bound in zip((-1, 1), self._bounds):
+            values = bound.getArray(readonly=True)
+            finite = np.abs(values) < PETSc.INFINITY
+            snap = finite & (np.abs(array - values) <= near)
+            if self._last_active is not None:
+                snap |= finite & (self._last_active == side)
+            array[snap] = values[snap]
+
+    def _record_active(self) -> None:
+        """Which entries ended the solve on their lower (−1) or upper (+1) bound."""
+        array = self._x.getArray(readonly=True)
+        active = np.zeros(len(array), dtype=np.int8)
+        for side, bound in zip((-1, 1), self._bounds):
+            values = bound.getArray(readonly=True)
+            finite = np.abs(values) < PETSc.INFINITY
+            active[finite & (np.abs(array - values) <= 1e-8)] = side
+        self._last_active = active
 
     def _feasible(self, x: PETSc.Vec) -> bool:
         """x within the bounds (to 1e-6 in units of x, i.e. round-off in physical units)."""
@@ -335,12 +384,12 @@ class StepSolver:
         if self._loaded_valid and x.equal(self._loaded):
             return
         start = _time.perf_counter()
-        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         xp = self._xp
-        if self._R is None:
+        if self._P is None:
+            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
             x.copy(xp)
         else:
-            self._R.mult(x, xp)
+            self._P.to_physical(x, xp)
         if self._columns is not None:
             xp.pointwiseMult(xp, self._columns)
         elif self.scale != 1.0:
@@ -374,11 +423,11 @@ class StepSolver:
     def _residual(self, snes, x, b_snes) -> None:
         self._load_iterate(x)
         start = _time.perf_counter()
-        b = b_snes if self._R is None else self._b_phys
+        b = b_snes if self._P is None else self._b_phys
         # physical units: b = u - g on Dirichlet rows
         self.fields.assemble_residual(b, self._xp, self.bcs, self._free_point_forces())
-        if self._R is not None:
-            self._R.multTranspose(b, b_snes)
+        if self._P is not None:
+            self._P.residual(b, b_snes)
         self.timings["residual"] += _time.perf_counter() - start
 
     def _jacobian(self, snes, x, A_snes, P) -> None:
@@ -386,14 +435,15 @@ class StepSolver:
             return  # A unchanged: the preconditioner (factorization) is reused as it is
         self._load_iterate(x)
         start = _time.perf_counter()
-        A = A_snes if self._R is None else self._A_phys
+        A = A_snes if self._P is None else self._A_phys
         self.fields.assemble_jacobian(A, self.bcs)
         if self._columns is not None:
             A.diagonalScale(None, self._columns)  # d(residual)/dx = d(residual)/du * scales
         elif self.scale != 1.0:
             A.scale(self.scale)  # d(residual)/dx = d(residual)/du * scale
-        if self._R is not None:
-            A.PtAP(self._R, result=A_snes)
+        if self._P is not None:
+            self._P.jacobian(A, A_snes)
+            self._P.stabilize(A_snes, x, self._b, self._bounds)
         if self._block is not None:
             self._block.update()
         self._jacobian_dt = self.dt
@@ -426,14 +476,22 @@ class StepSolver:
             fem_petsc.set_bc(self._load_vec, self.bcs, scale=0.0)
             self._force_scale = self._load_vec.norm()
         self.fields.from_functions(self._xp)
-        if self._R is None:
-            self._xp.copy(self._x)
+        xs = self._x
+        if self._P is not None:
+            if self._xs is None:
+                self._xs = self._xp.duplicate()
+            self._xp.copy(self._xs)
+            xs = self._xs
         else:
-            self._R.multTranspose(self._xp, self._x)
+            self._xp.copy(xs)
         if self._columns is not None:
-            self._x.pointwiseDivide(self._x, self._columns)
+            xs.pointwiseDivide(xs, self._columns)
         elif self.scale != 1.0:
-            self._x.scale(1.0 / self.scale)
+            xs.scale(1.0 / self.scale)
+        if self._P is not None:
+            self._P.to_snes(xs, self._x)
+        if self._bounds is not None:
+            self._snap_to_bounds(self._x)
         self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
         self._round_off_scale = max(self._force_scale, self._free_residual_norm())
         its = 0
@@ -460,6 +518,8 @@ class StepSolver:
             detail = f"last linear solve reason {ksp_reason}" if ksp_reason < 0 else ""
             raise ConvergenceError(reason_name(reason), its, time, step, detail)
         self.last_reason = reason_name(reason)
+        if self._bounds is not None:
+            self._record_active()
         return its
 
     def _run(self, snes: PETSc.SNES) -> tuple[int, int]:
@@ -476,6 +536,7 @@ class StepSolver:
     def destroy(self) -> None:
         """Free the PETSc objects."""
         for obj in (self.snes, self._free_snes, self._A, self._b, self._x, self._loaded, self._b_free,
-                    self._load_vec, self._A_phys, self._b_phys, self._columns, self._block):
+                    self._load_vec, self._A_phys, self._b_phys, self._columns, self._block,
+                    self._xs):
             if obj is not None:
                 obj.destroy()

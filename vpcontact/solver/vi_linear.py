@@ -399,12 +399,13 @@ class LaggedMultigrid(_ReducedSolve):
         self._ready = True
 
 
-def rigid_body_modes(V, rotation: Optional[PETSc.Mat] = None, layout=None) -> PETSc.NullSpace:
+def rigid_body_modes(V, variables=None, layout=None) -> PETSc.NullSpace:
     """Orthonormal rigid-body modes (translations and rotations) of a vector P_k space, in the
     layout of its PETSc vectors (owned entries): GAMG's near null space for elasticity. With
     ``layout`` (a :class:`~vpcontact.model.fields.FieldLayout`), in the layout of its SNES
-    vector (zero in fields other than u). With ``rotation`` R (unknowns ũ = Rᵀu in local
-    frames), the modes are written in those frames."""
+    vector (zero in fields other than u). With ``variables`` (a :class:`~vpcontact.solver.
+    variables.ChangeOfVariables` whose P is a rotation R: unknowns ũ = Rᵀu in local frames),
+    the modes are written in those frames."""
     bs = V.dofmap.index_map_bs
     owned = V.dofmap.index_map.size_local
     x = V.tabulate_dof_coordinates()[:owned]
@@ -427,9 +428,9 @@ def rigid_body_modes(V, rotation: Optional[PETSc.Mat] = None, layout=None) -> PE
                 vec = PETSc.Vec().createMPI((full.getLocalSize(), None), comm=comm)
                 vec.array[:] = full.getArray(readonly=True)
                 full.destroy()
-        if rotation is not None:
+        if variables is not None:
             physical = vec.copy()
-            rotation.multTranspose(physical, vec)
+            variables.to_snes(physical, vec)
             physical.destroy()
         vectors.append(vec)
     for i, vec in enumerate(vectors):
