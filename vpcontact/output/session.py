@@ -231,6 +231,7 @@ class Session:
             "kernel_calls": solver.kernel_calls,
             "vi_solves": solver.vi_solves,
             "vi_linear_solves": None if solver.lagged_lu is None else solver.lagged_lu.counters(),
+            "stabilization": None if problem.held is None else problem.held.report(),
             "warnings": warnings,
         }
         def write():

@@ -78,6 +78,7 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
                                      predictor=scene.solver.predictor,
                                      linear=scene.solver.linear,
                                      time_scheme=scene.time.scheme)
+        problem.check_held(_check_times(scene))
     except SolverOptionError as err:
         known = err.option is not None and err.option in scene.solver.petsc_options
         raise scene.error("solver.petsc_options" + (f".{err.option}" if known else ""),
@@ -351,6 +352,12 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
     if gap is None or gap.is_constant:
         return Signorini(tag, gap=0.0 if gap is None else gap.value())
     return Signorini(tag, gap=lambda x: gap.numpy(x))
+
+
+def _check_times(scene: Scene, count: int = 16) -> np.ndarray:
+    """t = 0 and up to ``count`` step times, evenly spread, for checks over the run."""
+    steps = max(1, int(math.ceil(scene.time.T / scene.time.k - 1e-9)))
+    return np.linspace(0.0, scene.time.T, min(steps, count) + 1)
 
 
 def _force_direction(scene: Scene, force) -> tuple:

@@ -231,13 +231,12 @@ def _read_box(t: Table, dim: int | None) -> BoxSelector | None:
 
 def check_parts(report: Report, parts: dict[str, BoundaryPart],
                 contacts: tuple[ContactSpec | None, ...], array: bool, raw_contact) -> None:
-    """Cross checks: a Dirichlet part exists; every boundary part of kind contact has a contact
+    """Cross checks: a Dirichlet or contact part exists; every boundary part of kind contact has a contact
     table and every contact table names its own boundary part of kind contact. (Whether the
     Dirichlet parts hold the body is checked on the mesh, by the builder.)"""
-    if not any(part.kind in DIRICHLET_KINDS for part in parts.values()):
+    if not contacts and not any(part.kind in DIRICHLET_KINDS for part in parts.values()):
         report.add("boundary", "no boundary part has kind = 'clamped', 'displacement' or "
-                               "'symmetry'; at least one is needed (Γ1 must have positive "
-                               "measure, and the Dirichlet parts must hold the body)")
+                               "'symmetry', and no contact part; one is needed to hold the body")
     if any(c is None for c in contacts):
         return  # an invalid contact table: reported where it is
     named = {}

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Callable, Optional, Sequence, Union
 
 import numpy as np
+import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
@@ -156,7 +157,20 @@ class DirichletParts:
         return self.V.mesh.comm.allreduce(local, op=MPI.SUM)
 
     def check_rigid_motions(self) -> None:
-        """Raise InputError naming the free rigid motions if the parts do not remove all of them.
+        """Raise InputError naming the free rigid motions if the parts do not remove all of
+        them (see :meth:`free_rigid_motions`)."""
+        free = self.free_rigid_motions()
+        if not free:
+            return
+        raise InputError(
+            "the Dirichlet parts do not hold the body: the rigid motion(s) "
+            + "; ".join(name for name, _ in free) + " remain free (and there is no contact "
+            "part to hold it). Clamp a part (kind = \"clamped\"), prescribe more displacement "
+            "components or add symmetry planes", key="boundary")
+
+    def free_rigid_motions(self) -> list[tuple[str, np.ndarray]]:
+        """The rigid motions the parts leave free, as (description, coefficients over the modes
+        of :func:`rigid_mode_expressions`), orthonormal (collective).
 
         A rigid motion w(x) = a + b × x is removed when no such w other than 0 vanishes at all
         prescribed dofs, i.e. when the Gram matrix of the rigid modes restricted to those dofs
@@ -178,17 +192,41 @@ class DirichletParts:
         gram = comm.allreduce(values.T @ values, op=MPI.SUM)
         eigenvalues, vectors = np.linalg.eigh(gram)
         free = eigenvalues <= 1e-10 * max(eigenvalues[-1], np.finfo(float).tiny)
-        if not free.any():
-            return
-        described = []
+        result = []
         for v in vectors[:, free].T:
             weights = np.abs(v) / np.abs(v).max()
-            described.append(" + ".join(n for n, w in zip(names, weights) if w > 1e-6))
-        raise InputError(
-            "the Dirichlet parts do not hold the body: the rigid motion(s) "
-            + "; ".join(described) + " remain free (the contact condition alone does not remove "
-            "them). Clamp a part (kind = \"clamped\"), prescribe more displacement components or "
-            "add symmetry planes", key="boundary")
+            result.append((" + ".join(n for n, w in zip(names, weights) if w > 1e-6), v))
+        return result
+
+
+def rigid_mode_values(V, coefficients: np.ndarray) -> np.ndarray:
+    """The rigid motion Σ c_k w_k (modes of :func:`_rigid_modes` on the centred, scaled
+    coordinates of :meth:`DirichletParts.free_rigid_motions`) at V's dofs, unrolled (local
+    dofs, ghosts included; collective)."""
+    mesh, comm = V.mesh, V.mesh.comm
+    dim = V.dofmap.index_map_bs
+    lo = np.min(comm.allgather(mesh.geometry.x.min(axis=0)), axis=0)
+    hi = np.max(comm.allgather(mesh.geometry.x.max(axis=0)), axis=0)
+    size = max(float(np.max(hi - lo)), np.finfo(float).tiny)
+    x = (V.tabulate_dof_coordinates() - 0.5 * (lo + hi)) / size
+    _, modes = _rigid_modes(dim)
+    return sum(float(c) * np.asarray(m(x), dtype=np.float64)
+               for c, m in zip(coefficients, modes)).ravel()
+
+
+def rigid_mode_expressions(mesh, centre: np.ndarray, size: float) -> list:
+    """The rigid modes of :func:`_rigid_modes` as UFL vectors of x, on coordinates centred at
+    ``centre`` and scaled by ``size`` (as :meth:`DirichletParts.free_rigid_motions` uses)."""
+    dim = mesh.geometry.dim
+    x = ufl.SpatialCoordinate(mesh)
+    y = [(x[i] - float(centre[i])) / size for i in range(dim)]
+    e = [ufl.as_vector([1.0 if j == i else 0.0 for j in range(dim)]) for i in range(dim)]
+    if dim == 2:
+        return e + [ufl.as_vector([-y[1], y[0]])]
+    if dim == 3:
+        return e + [ufl.as_vector([0.0 * y[0], -y[2], y[1]]), ufl.as_vector([y[2], 0.0 * y[0], -y[0]]),
+                    ufl.as_vector([-y[1], y[0], 0.0 * y[0]])]
+    return e
 
 
 def _rigid_modes(dim: int):

@@ -28,7 +28,9 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor, past_nodes
-from vpcontact.errors import InputError, NonFiniteStateError, ObstacleOutOfReach, StepRejected
+from vpcontact.errors import (ConvergenceError, InputError, NonFiniteStateError,
+                              ObstacleOutOfReach, StepRejected)
+from vpcontact.solver.held import HeldByContacts, check_held
 from vpcontact.solver.step_solver import StepSolver
 from vpcontact.solver.variables import ChangeOfVariables
 from vpcontact.model.fields import Displacement, DisplacementPressure
@@ -37,7 +39,7 @@ from vpcontact.model.quadrature import QuadratureState
 from vpcontact.model.frames import rotation_matrix
 from vpcontact.model.contact import merged_bounds, merged_frames, merged_report
 from vpcontact.solver.bdf2 import Bdf2, check_time_scheme
-from vpcontact.solver.dirichlet import Dirichlet, DirichletParts
+from vpcontact.solver.dirichlet import Dirichlet, DirichletParts, rigid_mode_values
 from vpcontact.solver.loads import Loads, PointDofs, as_vector
 from vpcontact.model.tensors import as_mandel_matrix, as_mandel_vector, mandel_strain
 
@@ -146,13 +148,14 @@ class QuasistaticProblem:
                 raise InputError(f"the clamped boundary (tag {clamped_tag}) has no facets: "
                                  "meas(Γ1) > 0 is required", key="boundary")
             parts.insert(0, Dirichlet.clamped(clamped_tag, dim))
-        if not parts:
+        if not parts and not self._contact_laws:
             raise InputError("no Dirichlet part: meas(Γ1) > 0 is required (a clamped part, or "
                              "prescribed displacements and symmetry planes that hold the body)",
                                  key="boundary")
         self.dirichlet = DirichletParts(self.V, facet_tags, parts)
-        if not any(p.all_zero for p in parts):
-            self.dirichlet.check_rigid_motions()
+        free = [] if any(p.all_zero for p in parts) else self.dirichlet.free_rigid_motions()
+        if free and not self._contact_laws:
+            self.dirichlet.check_rigid_motions()  # (raises: nothing else can hold the body)
         self.bcs = self.dirichlet.bcs
 
         # Stress quadrature: exact for ε(v) of degree-p displacements paired with the stress.
@@ -201,6 +204,16 @@ class QuasistaticProblem:
             defaults["snes_linesearch_type"] = "l2"
         normal = ufl.FacetNormal(mesh)
         terms = [t for t in (p.terms(self.u, du, v, normal, ds) for p in self.contacts) if t]
+        # A body whose free rigid motions only its contacts hold (see vpcontact.solver.held).
+        self.held = None
+        if free:
+            el = getattr(law, "elasticity", None)
+            shear = el.shear_modulus if el is not None else law.E
+            self.held = HeldByContacts(self.u, free, shear)
+            terms.append(self.held.terms(v, du))
+            self._free_motions = free
+            self._facet_tags = facet_tags
+            self._load_terms = external
         for r, j in terms:
             residual += r
             jacobian += j
@@ -313,24 +326,32 @@ class QuasistaticProblem:
             free_first = self.solver.constant_jacobian and not self._contact_active
             its = self.solver.solve(t_new, n, try_unconstrained=free_first)
             its += self._refit_driven(t_new, n)
+            self._check_held_step(t_new)
             self._check_finite(t_new, n)
             ratio, order = (None, 1)
             if tolerance is not None:
                 ratio, order = self._error_ratio(u_old, dt, tolerance)
             if ratio is not None and ratio > 1.0:
                 raise StepRejected(ratio, order, t_new)
+        except ConvergenceError:
+            # a body that nothing holds drifts off on its stabilising spring (far: Newton stalls
+            # on round-off): say that rather than "did not converge"
+            try:
+                self._check_held_step(t_new)
+            finally:
+                self._roll_back(u_old, others_old, t_new - dt)
+            raise
         except Exception:
-            self.u.x.array[:] = u_old
-            for f, old in zip(self.fields.functions[1:], others_old):
-                f.x.array[:] = old
-            self.time.value = t_new - dt
-            self.state.rollback()
+            self._roll_back(u_old, others_old, t_new - dt)
             raise
         if self._bdf2 is not None:
+
             self._bdf2.accept(self.state, dt)  # before the commit: it keeps w at t_{n-1}
         self.state.commit()
         for part in self.contacts:
             part.commit(t_new)
+        if self.held is not None:
+            self.held.commit()
         if hasattr(self.law, "commit"):  # laws with internal variables of their own
             self.law.commit()
         self._contact_active = self._any_contact_active()
@@ -341,6 +362,69 @@ class QuasistaticProblem:
         report = StepReport(n, t_new, its, self.solver.last_reason, ratio, order)
         self.reports.append(report)
         return report
+
+    def _roll_back(self, u_old: np.ndarray, others_old: list, t_old: float) -> None:
+        """The state of the last accepted step, after a failed one."""
+        self.u.x.array[:] = u_old
+        for f, old in zip(self.fields.functions[1:], others_old):
+            f.x.array[:] = old
+        self.time.value = t_old
+        self.state.rollback()
+
+    def _check_held_step(self, t: float) -> None:
+        """A body held by its contacts: refuse the step if the stabilising spring carries a
+        share of the applied forces (see :meth:`~vpcontact.solver.held.HeldByContacts.
+        check_step`; collective)."""
+        if self.held is None:
+            return
+        reactions, forces = self.support_forces(per_part=True)
+        applied = float(np.abs(forces).sum() + np.abs(reactions).sum())
+        if self._point_loads or self._load_terms:
+            loads = fem.Function(self.V)
+            if self._load_terms:
+                fem.petsc.assemble_vector(loads.vector, fem.form(
+                    sum(self._load_terms[1:], self._load_terms[0])))
+            if self._point_loads:
+                dofs, values = self._point_forces()
+                loads.x.array[dofs] += values
+            owned = self.V.dofmap.index_map.size_local * self.V.dofmap.index_map_bs
+            applied += self.mesh.comm.allreduce(float(np.abs(loads.x.array[:owned]).sum()),
+                                                op=MPI.SUM)
+        self.held.check_step(applied, t)
+
+    def check_held(self, times) -> None:
+        """A body held by its contacts: refuse (InputError at ``boundary``) a free rigid motion
+        along which the loads push at one of ``times`` while no contact part can resist it (see
+        :func:`~vpcontact.solver.held.check_held`; collective). The time is restored."""
+        if self.held is None:
+            return
+        now = float(self.time.value)
+        try:
+            for t in times:
+                self.time.value = t
+                check_held(self.mesh, self._free_motions, lambda m: self._load_along(m, t),
+                           self.contacts, self._facet_tags)
+        finally:
+            self.time.value = now
+
+    def _load_along(self, coefficients, t: float) -> tuple[float, float]:
+        """(generalised force L · m of the applied loads on the rigid motion m (its
+        ``coefficients``) at t, and its scale Σ |L_i m_i|), L the nodal load vector (tractions,
+        body force, point loads)."""
+        loads = fem.Function(self.V)
+        if self._load_terms:
+            fem.petsc.assemble_vector(loads.vector, fem.form(sum(self._load_terms[1:],
+                                                                 self._load_terms[0])))
+            loads.vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self._point_loads:
+            dofs, values = self._point_forces()
+            loads.x.array[dofs] += values
+        mode = rigid_mode_values(self.V, coefficients)
+        owned = self.V.dofmap.index_map.size_local * self.V.dofmap.index_map_bs
+        products = loads.x.array[:owned] * mode[:owned]
+        comm = self.mesh.comm
+        return (comm.allreduce(float(products.sum()), op=MPI.SUM),
+                comm.allreduce(float(np.abs(products).sum()), op=MPI.SUM))
 
     def _refit_driven(self, t: float, n: int) -> int:
         """Obstacles driven by a force: solve again, linearized about the solved d, while the
