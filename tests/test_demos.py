@@ -98,3 +98,23 @@ def test_hertz_indentation_demo(shared_tmp_path, monkeypatch):
     assert np.all((force / force_hertz > 1.0) & (force / force_hertz < 1.2))
     for name in ("force_depth.png", "indentation.csv"):
         assert (out / name).stat().st_size > 200, name
+
+
+def test_indentation_creep_demo(shared_tmp_path, monkeypatch):
+    """The force-driven twin of the relaxation demo: the contact force is F(t) at every step,
+    and the depth grows while F is held."""
+    monkeypatch.setenv("CI", "1")
+    demo = _load("indentation_creep")
+    out = shared_tmp_path / "creep"
+    session = demo.run(out)
+    MPI.COMM_WORLD.barrier()
+    times = np.array(session.forces.times)
+    force = -np.array(session.forces.contact)[:, 1]
+    assert np.allclose(force, 6.0 * np.minimum(times / 0.25, 1.0), rtol=1e-8, atol=1e-9)
+    depth = -np.array(session.forces.driver, dtype=float)
+    held = times >= 0.25 - 1e-12
+    assert np.all(np.diff(depth[held]) > 0), depth  # creep under a constant force
+    assert depth[-1] > 1.2 * depth[held][0]
+    for name in ("indentation_creep.xdmf", "contact.csv", "reactions.csv", "summary.json",
+                 "creep.png", "final_state.png"):
+        assert (out / name).stat().st_size > 500, name
