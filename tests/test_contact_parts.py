@@ -200,6 +200,8 @@ obstacle = { shape = "plane", point = [1.0, 0], normal = [-1, 0] }
     (lambda t: t + '\n[boundary.bottom]\nkind = "contact"\nplane = { axis = "y", value = -0.5 }\n',
      r"boundary\.bottom\.kind", "boundary part 'bottom' has kind 'contact' but no contact "
      "table names it"),
+    (lambda t: "contact = [1]\n" + t.replace(TOP, ""), r"contact\[0\]",
+     "expected a table, got an integer"),
     (lambda t: t + TOP.replace('boundary = "top"', 'boundary = "left"'),
      r"contact\[1\]\.boundary", "boundary part 'left' has kind 'clamped', not 'contact'"),
 ])

@@ -228,6 +228,9 @@ def test_a_force_driven_indenter_from_a_scene(shared_tmp_path):
      r"contact\.force", "moves the obstacle away from the contact part"),
     (lambda s: s.replace('force = [0, "-10*t"]', 'force = [0, "-10*max(t - 0.5, 0)"]'),
      r"contact\.force", "the force is zero at t = 0.25"),
+    (lambda s: s.replace('force = [0, "-10*t"]', 'force = ["-10*t"]'), r"contact\.force", ""),
+    (lambda s: s.replace('type = "signorini"', 'type = "normal_compliance"\nmu = 1.0'),
+     r"contact\.force", "a foundation surface stays where it is"),
 ])
 def test_force_control_errors_are_located(shared_tmp_path, capsys, edit, key, message):
     scene = write_shared(shared_tmp_path / "bad.toml", edit(SCENE))
@@ -238,3 +241,10 @@ def test_force_control_errors_are_located(shared_tmp_path, capsys, edit, key, me
         assert re.search(rf"bad\.toml:\d+: {key}: .*{message}", err), err
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2
     assert not out.exists()
+
+
+def test_show_writes_the_force_back(shared_tmp_path):
+    from vpcontact.scene import loads_text
+    scene = loads_text(SCENE)
+    again = loads_text(scene.to_toml())
+    assert again == scene and again.contact.force is not None

@@ -70,7 +70,8 @@ SCENE = scenes.bundled()["elastic_2d"].read_text()
 TOKENS = ["[mesh]", "[law]", "[contact]", "type", "=", '"perzyna"', "cells", "[4, 4]", "E",
           "-1", "1e400", "nan", "inf", '"x[0]"', '"__import__(\'os\')"', "{", "}", "[[loads.point]]",
           "\n", "  ", "#", "'", '"', "kind", '"contact"', "plane", "true", "[boundary.x]",
-          "T", "k", "0", "1e-300", "sigma0", "[initial]", "alpha", "2.0", ",", "."]
+          "T", "k", "0", "1e-300", "sigma0", "[initial]", "alpha", "2.0", ",", ".",
+          "[[contact]]", "force", "motion", '"signorini"', "[0, \"-t\"]", "boundary", "obstacle"]
 
 
 @SCENES
