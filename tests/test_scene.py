@@ -354,9 +354,13 @@ def test_out_of_range_values_are_located(old, new, path, match):
 
 
 def test_no_clamped_part():
-    text = edit(BASE, 'kind = "clamped"', 'kind = "traction"')
-    err = problems(text, r"boundary: no boundary part has kind = 'clamped'")
+    """Without a Dirichlet part a scene needs a contact part to hold the body (whether it does is
+    checked on the mesh, tests/test_held_bodies.py)."""
+    text = edit(NO_CONTACT, 'kind = "clamped"', 'kind = "traction"')
+    err = problems(text, r"boundary: no boundary part has kind = 'clamped', 'displacement' or "
+                         r"'symmetry', and no contact part")
     assert problem_at(err, "clamped").line == line_of(text, "[boundary.top]")
+    loads_text(edit(BASE, "kind = \"clamped\"", "kind = \"traction\""))  # held by its contact
 
 
 def test_contact_part_without_contact_section():

@@ -21,6 +21,7 @@ from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
 from vpcontact.model.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
+from vpcontact.model.friction import Friction
 from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.errors import InputError, SolverOptionError
 from vpcontact.solver.loads import Loads, PointLoad
@@ -329,7 +330,8 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
         else:
             g = gap.ufl(ufl.SpatialCoordinate(mesh), 0.0)
             surface = Signorini(tag, gap=lambda x: gap.numpy(x))
-        return NormalCompliance(tag, mu=spec.mu, alpha=spec.alpha, gap=g, surface=surface)
+        return NormalCompliance(tag, mu=spec.mu, alpha=spec.alpha, gap=g, surface=surface,
+                                friction=_friction(spec.friction))
     if spec.obstacle is not None and spec.force is not None:
         phi, _ = obstacle_level_set(spec, scene.dim)
         force = spec.force
@@ -352,6 +354,18 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
     if gap is None or gap.is_constant:
         return Signorini(tag, gap=0.0 if gap is None else gap.value())
     return Signorini(tag, gap=lambda x: gap.numpy(x))
+
+
+def _friction(spec) -> Optional[Friction]:
+    """The friction law of a contact table (None: frictionless)."""
+    if spec is None:
+        return None
+    if spec.type == "coulomb":
+        return Friction("coulomb", coefficient=spec.coefficient)
+    threshold = spec.threshold
+    if threshold.is_constant:
+        return Friction("tresca", threshold=threshold.value())
+    return Friction("tresca", threshold=lambda x: threshold.ufl(x, 0.0))
 
 
 def _check_times(scene: Scene, count: int = 16) -> np.ndarray:

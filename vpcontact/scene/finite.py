@@ -51,6 +51,10 @@ def check_finite(scene: Scene, mesh, part_tags, facet_tags) -> None:
             checks.append((f"{where}.motion", contact.motion, np.zeros((3, 1))))
         if contact.force is not None:
             checks.append((f"{where}.force", contact.force, np.zeros((3, 1))))
+        if contact.friction is not None and contact.friction.threshold is not None:
+            checks.append((f"{where}.friction.threshold", (contact.friction.threshold,),
+                           on_part(contact.boundary)))
+            single.append(f"{where}.friction.threshold")
         if contact.rotation is not None:
             checks.append((f"{where}.rotation.angle", (contact.rotation.angle,),
                            np.zeros((3, 1))))

@@ -14,13 +14,15 @@ from vpcontact.scene.expressions import Expression
 from vpcontact.scene.schema import (Check, Table, at_least, between, constant_value, greater,
                                     type_name)
 from vpcontact.scene.locate import join
-from vpcontact.scene.specs import SHAPES, ContactSpec, LawSpec, ObstacleRotation, ObstacleShape
+from vpcontact.scene.specs import (SHAPES, ContactSpec, FrictionSpec, LawSpec, ObstacleRotation,
+                                   ObstacleShape)
 
 __all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contacts", "read_law"]
 
 LAW_KEYS = ("type", "scheme", "sigma_y", "mu_star", "yield_set", "a", "b")
 CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "motion", "rotation", "force",
-                "max_distance", "mu", "alpha")
+                "max_distance", "mu", "alpha", "friction")
+FRICTION_KEYS = ("type", "coefficient", "threshold")
 ROTATION_KEYS = ("center", "angle", "axis")
 LAW_TYPES = ("elastic", "perzyna", "linear")
 SCHEMES = ("explicit", "implicit")
@@ -118,6 +120,10 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     if kind == "signorini":
         for key in ("mu", "alpha"):
             t.forbid(key, "only for type = 'normal_compliance'")
+        t.forbid("friction", "friction on a Signorini part (a rigid obstacle) is not available "
+                             "yet: use type = 'normal_compliance' (a stiff foundation, small mu) "
+                             "for frictional contact")
+    friction = _friction(t, dim) if kind == "normal_compliance" and t.has("friction") else None
     if t.has("obstacle"):
         if t.has("gap"):
             t.add("gap", "give either gap or obstacle, not both")
@@ -135,7 +141,7 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
         rotation = _rotation(t, dim) if t.has("rotation") and moves else None
         force = t.exprs("force", ("t",), dim, dim) if t.has("force") and moves else None
         return ContactSpec(kind, boundary, obstacle=obstacle, motion=motion, rotation=rotation,
-                           force=force,
+                           force=force, friction=friction,
                            max_distance=t.number("max_distance", DEFAULT_MAX_DISTANCE,
                                                  check=greater(0)),
                            mu=t.number("mu", check=greater(0)) if kind != "signorini" else None,
@@ -148,7 +154,33 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     if kind == "signorini":
         return ContactSpec(kind, boundary, gap=_gap(t, dim))
     return ContactSpec(kind, boundary, gap=_gap(t, dim), mu=t.number("mu", check=greater(0)),
-                       alpha=t.number("alpha", 1.0, check=between(0.0, 1.0, "(]")))
+                       alpha=t.number("alpha", 1.0, check=between(0.0, 1.0, "(]")),
+                       friction=friction)
+
+
+def _friction(t: Table, dim: int | None) -> FrictionSpec | None:
+    """``friction = { type = "coulomb", coefficient = 0.3 }`` or
+    ``{ type = "tresca", threshold = "<expression of x>" }``."""
+    f = t.table("friction", FRICTION_KEYS)
+    if f is None:
+        return None
+    kind = f.choice("type", ("coulomb", "tresca"))
+    if kind == "coulomb":
+        f.forbid("threshold", "only for type = 'tresca' (Coulomb's threshold is coefficient × "
+                              "the contact pressure)")
+        coefficient = f.number("coefficient", check=at_least(0))
+        return None if coefficient is None else FrictionSpec(kind, coefficient=coefficient)
+    if kind == "tresca":
+        f.forbid("coefficient", "only for type = 'coulomb'")
+        threshold = f.expr("threshold", ("x",), dim)
+        if threshold is not None and threshold.is_constant:
+            value = constant_value(f.report, f.at("threshold"), threshold)
+            message = at_least(0)(value) if value is not None else None
+            if message is not None:
+                f.add("threshold", message)
+                return None
+        return None if threshold is None else FrictionSpec(kind, threshold=threshold)
+    return None
 
 
 def _obstacle(t: Table, dim: int | None, moving: bool) -> Expression | ObstacleShape | None:

@@ -193,6 +193,16 @@ class ObstacleRotation:
 
 
 @dataclass(frozen=True)
+class FrictionSpec:
+    """``friction = { type = "coulomb", coefficient = 𝔣 }`` or ``{ type = "tresca",
+    threshold = g_T(x) }`` in a contact table (see :mod:`vpcontact.model.friction`)."""
+
+    type: str
+    coefficient: float | None = None
+    threshold: Expression | None = None
+
+
+@dataclass(frozen=True)
 class ContactSpec:
     """``[contact]``: the contact condition on the part named ``boundary``.
 
@@ -212,6 +222,7 @@ class ContactSpec:
         max_distance: longest ray searched for the obstacle (with an obstacle only).
         mu: deformability μ of the foundation (normal compliance only).
         alpha: exponent α of normal compliance (normal compliance only).
+        friction: Coulomb or Tresca friction (normal compliance only), or ``None``.
     """
 
     type: str = "none"
@@ -224,6 +235,7 @@ class ContactSpec:
     max_distance: float | None = None
     mu: float | None = None
     alpha: float | None = None
+    friction: FrictionSpec | None = None
 
 
 @dataclass(frozen=True)

@@ -122,7 +122,11 @@ def dump(scene: Any) -> str:
             "obstacle": contact.obstacle, "motion": contact.motion,
             "rotation": contact.rotation, "force": contact.force,
             "max_distance": contact.max_distance, "mu": contact.mu,
-            "alpha": contact.alpha}
+            "alpha": contact.alpha,
+            "friction": None if contact.friction is None else {
+                k: v for k, v in (("type", contact.friction.type),
+                                  ("coefficient", contact.friction.coefficient),
+                                  ("threshold", contact.friction.threshold)) if v is not None}}
         if scene.contact_array:
             blocks += ["[[contact]]"] + _table("", entries)
         else:

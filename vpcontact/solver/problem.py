@@ -196,12 +196,12 @@ class QuasistaticProblem:
             self.contacts.append(part)
             taken = np.union1d(taken, _node_dofs(self.V, part.node_blocks)).astype(np.int32)
         defaults = {}
-        for part in self.contacts:
-            defaults.update(part.snes_defaults(law.linear_in_strain))
         if not law.linear_in_strain:
             # Stiff elastic (E ~ 1e8) against soft viscous (μ*/k) branches: full Newton steps
             # overshoot where points unload; the l2 line search restores convergence.
             defaults["snes_linesearch_type"] = "l2"
+        for part in self.contacts:  # (a part's needs come first: friction's line search)
+            defaults.update(part.snes_defaults(law.linear_in_strain))
         normal = ufl.FacetNormal(mesh)
         terms = [t for t in (p.terms(self.u, du, v, normal, ds) for p in self.contacts) if t]
         # A body whose free rigid motions only its contacts hold (see vpcontact.solver.held).
@@ -300,6 +300,9 @@ class QuasistaticProblem:
         n = self.step_index + 1
         if n == 1 and hasattr(self.fields, "capture_initial_state"):
             self.fields.capture_initial_state(self.state)
+        if n == 1:  # the initial state (u_0 included) is where the contact parts start from
+            for part in self.contacts:
+                part.commit(t_new - dt)
         u_old = self.u.x.array.copy()
         others_old = [f.x.array.copy() for f in self.fields.functions[1:]]
         if self.predictor == "linear" and self._u_prev is not None:

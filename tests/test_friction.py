@@ -1,0 +1,158 @@
+# SPDX-License-Identifier: MIT
+"""Friction on normal-compliance parts (vpcontact.model.friction): a block pressed onto a
+deformable foundation, then dragged along it by its top.
+
+* Coulomb, full slip: the tangential contact force is 𝔣 × the normal one, to 1e-8.
+* Tresca, full slip: the tangential force is the threshold × the contact length, to 1e-8.
+* Stick below the limit: with 𝔣 large the bottom does not slip (it creeps by about ε per step).
+* Newton iterations per step once sliding ≤ 6; the scene keys and their located errors.
+"""
+
+import json
+import re
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+from dolfinx import mesh as dmesh
+
+from vpcontact import cli
+from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain
+from vpcontact.model.friction import SLIP_LENGTH, Friction
+from vpcontact.solver import Dirichlet, QuasistaticProblem, StepControl, advance, tag_facets
+
+from mpi_launch import write_shared
+
+DRAGGED = """\
+name = "dragged"
+
+[mesh]
+type = "rectangle"
+lower = [0.0, 0.0]
+upper = [1.0, 0.25]
+cells = [16, 4]
+
+[boundary.top]
+kind = "displacement"
+plane = { axis = "y", value = 0.25 }
+displacement = ["0.02*max(t - 0.5, 0)", "-0.002*min(t/0.5, 1)"]
+
+[boundary.bottom]
+kind = "contact"
+plane = { axis = "y", value = 0.0 }
+
+[material]
+E = 1000.0
+nu = 0.3
+plane = "strain"
+
+[contact]
+type = "normal_compliance"
+boundary = "bottom"
+mu = 1e-3
+FRICTION
+
+[time]
+T = 1.0
+k = 0.1
+
+[output]
+xdmf = false
+figures = false
+"""
+
+
+def _forces(out):
+    lines = (out / "reactions.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    return {name: rows[:, i] for i, name in enumerate(header)}
+
+
+def _run(tmp, name, friction):
+    scene = write_shared(tmp / f"{name}.toml", DRAGGED.replace("FRICTION", friction))
+    out = tmp / name
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    return _forces(out)
+
+
+def test_coulomb_full_slip_carries_the_coefficient_times_the_normal_force(shared_tmp_path):
+    f = _run(shared_tmp_path, "coulomb", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    sliding = f["t"] >= 0.7
+    ratio = -f["contact_x"][sliding] / f["contact_y"][sliding]
+    assert np.allclose(ratio, 0.3, rtol=1e-8), ratio
+    assert f["contact_y"][-1] > 1.0  # pressed
+    summary = json.loads((shared_tmp_path / "coulomb" / "summary.json").read_text())
+    its = np.array(summary["newton_iterations"])[np.array(f["t"][1:]) >= 0.6 - 1e-12]
+    assert its.max() <= 6, summary["newton_iterations"]  # while sliding
+
+
+def test_tresca_full_slip_carries_the_threshold_times_the_length(shared_tmp_path):
+    f = _run(shared_tmp_path, "tresca", 'friction = { type = "tresca", threshold = 2.0 }')
+    sliding = f["t"] >= 0.7
+    assert np.allclose(-f["contact_x"][sliding], 2.0 * 1.0, rtol=1e-8), f["contact_x"]
+
+
+def test_below_the_limit_the_block_sticks():
+    """𝔣 = 10 and a drag of 2e-4: the bottom's tangential displacement stays at the regularized
+    law's creep (about ε = SLIP_LENGTH × extent per step), 1e-5 of the top's."""
+    comm = MPI.COMM_WORLD
+    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [16, 4])
+    tags = tag_facets(msh, {1: lambda x: np.isclose(x[1], 0.25), 2: lambda x: np.isclose(x[1], 0.0)})
+
+    def ux(x, t):
+        return np.full(x.shape[1], 2e-4 * max(t - 0.5, 0.0))
+
+    def uy(x, t):
+        return np.full(x.shape[1], -0.002 * min(t / 0.5, 1.0))
+
+    law = PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3)))
+    problem = QuasistaticProblem(
+        msh, tags, law, dirichlet=[Dirichlet(1, (ux, uy), "top")],
+        contact=NormalCompliance(2, mu=1e-3, friction=Friction("coulomb", coefficient=10.0)))
+    steps = 0
+    for step in advance(problem, 1.0, StepControl(0.1)):
+        steps += 1
+    bottom = problem.contacts[0].nodes
+    x_dofs = bottom.nodes * 2
+    slip = comm.allreduce(float(np.max(np.abs(problem.u.x.array[x_dofs]), initial=0.0)),
+                          op=MPI.MAX)
+    # the press alone spreads the bottom a little (Poisson) before any drag: measure the drag's
+    assert slip < 20 * steps * SLIP_LENGTH * 1.0 + 1e-6 * 1e-4, slip
+    _, contact = problem.support_forces()
+    assert 0 < -contact[0] < 10.0 * contact[1]  # a tangential force, below the limit
+
+
+@pytest.mark.parametrize("friction, key, message", [
+    ('friction = { type = "coulomb", coefficient = -0.1 }', r"contact\.friction\.coefficient",
+     "must be >= 0"),
+    ('friction = { type = "coulomb", coefficient = 0.1, threshold = 1 }',
+     r"contact\.friction\.threshold", "only for type = 'tresca'"),
+    ('friction = { type = "tresca", threshold = -1 }', r"contact\.friction\.threshold",
+     "must be >= 0"),
+    ('friction = { type = "viscous" }', r"contact\.friction\.type", ""),
+])
+def test_friction_errors_are_located(shared_tmp_path, capsys, friction, key, message):
+    scene = write_shared(shared_tmp_path / "bad.toml", DRAGGED.replace("FRICTION", friction))
+    assert cli.main(["validate", str(scene)]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert re.search(rf"bad\.toml:\d+: {key}: .*{message}", err), err
+
+
+def test_friction_on_a_signorini_part_is_refused(shared_tmp_path, capsys):
+    text = DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
+        "mu = 1e-3\n", "").replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    scene = write_shared(shared_tmp_path / "sig.toml", text)
+    assert cli.main(["validate", str(scene)]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert re.search(r"sig\.toml:\d+: contact\.friction: .*friction on a Signorini part", err), err
+
+
+def test_show_writes_friction_back():
+    from vpcontact.scene import loads_text
+    for friction in ('friction = { type = "coulomb", coefficient = 0.3 }',
+                     'friction = { type = "tresca", threshold = "1 + x[0]" }'):
+        scene = loads_text(DRAGGED.replace("FRICTION", friction))
+        assert loads_text(scene.to_toml()) == scene and scene.contact.friction is not None
