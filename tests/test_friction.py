@@ -94,8 +94,8 @@ def test_tresca_full_slip_carries_the_threshold_times_the_length(shared_tmp_path
 
 
 def test_below_the_limit_the_block_sticks():
-    """𝔣 = 10 and a drag of 2e-4: the bottom's tangential displacement stays at the regularized
-    law's creep (about ε = SLIP_LENGTH × extent per step), 1e-5 of the top's."""
+    """𝔣 = 10, pressed, then dragged by 1e-4: the bottom's tangential displacement stays at the
+    regularized law's creep, about ε = SLIP_LENGTH × extent per step (1e-5 of the drag)."""
     comm = MPI.COMM_WORLD
     msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [16, 4])
     tags = tag_facets(msh, {1: lambda x: np.isclose(x[1], 0.25), 2: lambda x: np.isclose(x[1], 0.0)})
@@ -117,8 +117,7 @@ def test_below_the_limit_the_block_sticks():
     x_dofs = bottom.nodes * 2
     slip = comm.allreduce(float(np.max(np.abs(problem.u.x.array[x_dofs]), initial=0.0)),
                           op=MPI.MAX)
-    # the press alone spreads the bottom a little (Poisson) before any drag: measure the drag's
-    assert slip < 20 * steps * SLIP_LENGTH * 1.0 + 1e-6 * 1e-4, slip
+    assert slip < 2 * steps * SLIP_LENGTH * 1.0, slip  # (measured: 1.0e-9 in 10 steps)
     _, contact = problem.support_forces()
     assert 0 < -contact[0] < 10.0 * contact[1]  # a tangential force, below the limit
 
