@@ -4,7 +4,9 @@ deformable foundation, then dragged along it by its top.
 
 * Coulomb, full slip: the tangential contact force is 𝔣 × the normal one, to 1e-8.
 * Tresca, full slip: the tangential force is the threshold × the contact length, to 1e-8.
-* Stick below the limit: with 𝔣 large the bottom does not slip (it creeps by about ε per step).
+* Stick below the limit: with 𝔣 large the bottom moves only by the stick's micro-slip |t|/k_t.
+* A block pushed up an inclined foundation (NAFEMS's frictional benchmark): the horizontal push
+  over the weight is (tan α + 𝔣)/(1 − 𝔣 tan α), to 1e-7.
 * Newton iterations per step once sliding ≤ 6; the scene keys and their located errors.
 """
 
@@ -18,8 +20,11 @@ from dolfinx import mesh as dmesh
 
 from vpcontact import cli
 from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain
-from vpcontact.model.friction import SLIP_LENGTH, Friction
-from vpcontact.solver import Dirichlet, QuasistaticProblem, StepControl, advance, tag_facets
+import ufl
+
+from vpcontact.model.friction import Friction
+from vpcontact.solver import (Dirichlet, Loads, QuasistaticProblem, StepControl, advance,
+                              tag_facets)
 
 from mpi_launch import write_shared
 
@@ -94,8 +99,8 @@ def test_tresca_full_slip_carries_the_threshold_times_the_length(shared_tmp_path
 
 
 def test_below_the_limit_the_block_sticks():
-    """𝔣 = 10, pressed, then dragged by 1e-4: the bottom's tangential displacement stays at the
-    regularized law's creep, about ε = SLIP_LENGTH × extent per step (1e-5 of the drag)."""
+    """𝔣 = 10, pressed, then dragged by 1e-4: the bottom moves only by the stick's micro-slip,
+    |t|/k_t, 1e-3 of the drag."""
     comm = MPI.COMM_WORLD
     msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [16, 4])
     tags = tag_facets(msh, {1: lambda x: np.isclose(x[1], 0.25), 2: lambda x: np.isclose(x[1], 0.0)})
@@ -110,16 +115,54 @@ def test_below_the_limit_the_block_sticks():
     problem = QuasistaticProblem(
         msh, tags, law, dirichlet=[Dirichlet(1, (ux, uy), "top")],
         contact=NormalCompliance(2, mu=1e-3, friction=Friction("coulomb", coefficient=10.0)))
-    steps = 0
+    at_press = None
     for step in advance(problem, 1.0, StepControl(0.1)):
-        steps += 1
-    bottom = problem.contacts[0].nodes
-    x_dofs = bottom.nodes * 2
-    slip = comm.allreduce(float(np.max(np.abs(problem.u.x.array[x_dofs]), initial=0.0)),
-                          op=MPI.MAX)
-    assert slip < 2 * steps * SLIP_LENGTH * 1.0, slip  # (measured: 1.0e-9 in 10 steps)
+        if abs(step.time - 0.5) < 1e-9:
+            at_press = problem.u.x.array.copy()
+    part = problem.contacts[0]
+    x_dofs = part.nodes.nodes * 2
+    moved = comm.allreduce(float(np.max(np.abs(problem.u.x.array[x_dofs] - at_press[x_dofs]),
+                                        initial=0.0)), op=MPI.MAX)
+    traction = comm.allreduce(float(np.max(np.abs(part.friction_state()["traction"]),
+                                           initial=0.0)), op=MPI.MAX)
+    assert moved <= 1.01 * traction / part.stick_stiffness, (moved, traction)
+    assert moved < 1e-2 * 1e-4, moved
+    assert not comm.allreduce(bool(part.friction_state()["slips"].any()), op=MPI.LOR)
     _, contact = problem.support_forces()
     assert 0 < -contact[0] < 10.0 * contact[1]  # a tangential force, below the limit
+
+
+def test_a_block_pushed_up_an_inclined_foundation():
+    """Plane strain: a block [0, 1] × [0, 0.25] on a foundation inclined at α = 20° (the whole
+    problem turned), its weight W vertical, pushed horizontally on the upper part of its back
+    face (not at the contact corner) until it slides up: P/W = (tan α + 𝔣)/(1 − 𝔣 tan α)."""
+    comm = MPI.COMM_WORLD
+    alpha, f, W = np.radians(20.0), 0.3, 5.0
+    Q = np.array([[np.cos(alpha), -np.sin(alpha)], [np.sin(alpha), np.cos(alpha)]])
+    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [16, 4])
+    msh.geometry.x[:, :2] = msh.geometry.x[:, :2] @ Q.T
+
+    def ref(p):
+        return Q.T @ p[:2]
+
+    tags = tag_facets(msh, {1: lambda p: np.isclose(ref(p)[0], 0.0) & (ref(p)[1] > 1e-9),
+                            2: lambda p: np.isclose(ref(p)[1], 0.0)})
+    loads = Loads(body_force=lambda X, t: ufl.as_vector(
+        [0.0, -W / 0.25 * ufl.min_value(2 * t, 1.0)]))
+
+    def push(x, t):
+        return np.full(x.shape[1], 0.1 * max(t - 0.5, 0.0))
+
+    problem = QuasistaticProblem(
+        msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))), loads=loads,
+        dirichlet=[Dirichlet(1, (push, None), "back")],
+        contact=NormalCompliance(2, mu=1e-3, friction=Friction("coulomb", coefficient=f)))
+    expected = (np.tan(alpha) + f) / (1 - f * np.tan(alpha))
+    for step in advance(problem, 1.0, StepControl(0.1)):
+        reactions, _ = problem.support_forces()
+        if step.time >= 0.7 - 1e-9:
+            assert abs(reactions[0][0] / W / expected - 1) < 1e-7, (reactions, expected)
+            assert step.newton_iterations <= 6
 
 
 @pytest.mark.parametrize("friction, key, message", [

@@ -77,8 +77,11 @@ class ContactPart(Protocol):
     def state(self) -> dict:
         """What a checkpoint must hold to continue (JSON-able; {} for most parts)."""
 
-    def restore(self, state: dict, time: float) -> None:
-        """Continue from :meth:`state` at ``time``."""
+    def arrays(self) -> dict:
+        """This rank's arrays a checkpoint must hold to continue ({} for most parts)."""
+
+    def restore(self, state: dict, time: float, arrays: Optional[dict] = None) -> None:
+        """Continue from :meth:`state` and :meth:`arrays` at ``time``."""
 
     def pressure(self) -> np.ndarray:
         """σ_ν at this rank's nodes (collective)."""

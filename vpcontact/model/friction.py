@@ -2,25 +2,25 @@
 """Friction on a normal-compliance part: Coulomb's law with the compliance pressure (the model of
 Klarbring, Mikelić and Shillor), or Tresca's with a given threshold.
 
-On Γ3 the tangential traction σ_τ opposes the slip of the body over the (fixed) foundation and
-is bounded by a threshold s:
+On Γ3 the tangential traction t = σ_τ opposes the slip of the body over the (fixed) foundation
+and is bounded by a threshold s:
 
-    |σ_τ| ≤ s,   σ_τ = −s Δu_τ / |Δu_τ| where the body slips,
-    s = 𝔣 p(u_ν) (Coulomb, p = (1/μ)(u_ν − g)_+^α the compliance pressure)
+    |t| ≤ s,   t = −s Δu_τ / |Δu_τ| where the body slips,
+    s = 𝔣 p(u_ν) (Coulomb, p = (1/μ)(u_ν − g)_+^α the compliance pressure),
     s = g_T(x) where p > 0 (Tresca: a given threshold, on the part in contact),
 
-incrementally: Δu_τ = (I − n ⊗ n)(u_n − u_{n−1}) is the slip over the step. The step's
-equations keep this law's exact value wherever the slip is not tiny, through the regularized
-direction
+incrementally (Δu_τ = (I − n ⊗ n)(u_n − u_{n−1}), the slip over the step). As in plasticity, a
+stiff "elastic" stick and a return mapping make the step's equations semi-smooth, with an exact
+slip law:
 
-    σ_τ = −s Δu_τ / √(|Δu_τ|² + ε²),     ε = SLIP_LENGTH × the mesh's extent,
+    t_trial = t_{n−1} − k_t Δu_τ,     t = t_trial if |t_trial| ≤ s, else s t_trial/|t_trial|,
 
-which differs from s Δu_τ/|Δu_τ| by a relative ε²/(2|Δu_τ|²) where the body slips (5e-9 for a
-slip of 1e4 ε, i.e. 1e-5 of the extent) and, where the body sticks (|σ_τ| < s), lets it creep
-by ε (|σ_τ|/s)/√(1 − (σ_τ/s)²) per step (about ε). So the
-tangential force of a sliding part is the threshold's integral to solver tolerance, and a
-sticking part slips by about ε per step. The residual term and its exact derivative (Newton)
-are UFL boundary integrals.
+k_t = STICK_STIFFNESS × G/L (G the body's shear modulus, L the mesh's extent): where the body
+sticks it moves by |t|/k_t — about 1e-3 of its elastic displacement under the same traction —
+and where it slips |t| = s exactly, so a sliding part carries its threshold's integral to solver
+tolerance. The friction traction and its exact (generalised) derivative are UFL boundary
+integrals; the history t_{n−1} is kept at the nodes of Γ3 (a field of the displacement's space,
+updated by the same return mapping at the nodes when a step is accepted).
 
 Frictional Signorini (a rigid obstacle) is not available yet: there the normal force is the
 variational inequality's multiplier and a Coulomb cone is not a box of SNES VI.
@@ -30,26 +30,29 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Optional
+from typing import Callable, Optional
 
+import numpy as np
 import ufl
 
 from vpcontact.errors import InputError
 
-#: ε of the regularized slip direction, relative to the mesh's extent.
-SLIP_LENGTH = 1e-9
+#: k_t relative to G / L.
+STICK_STIFFNESS = 1e3
 
 FRICTION_TYPES = ("coulomb", "tresca")
 
 
 @dataclass(frozen=True)
 class Friction:
-    """Coulomb friction (``coefficient`` 𝔣 ≥ 0) or Tresca friction (``threshold``: a number or a
-    function of the spatial coordinate returning a UFL expression, ≥ 0)."""
+    """Coulomb friction (``coefficient`` 𝔣 ≥ 0) or Tresca friction (``threshold`` g_T ≥ 0: a
+    number, or a function of the spatial coordinate returning a UFL expression, with
+    ``threshold_at`` the same as a function of points (3, N) -> (N,))."""
 
     type: str
     coefficient: Optional[float] = None
     threshold: object = None
+    threshold_at: Optional[Callable[[np.ndarray], np.ndarray]] = None
 
     def __post_init__(self):
         if self.type not in FRICTION_TYPES:
@@ -60,6 +63,9 @@ class Friction:
                                            and self.coefficient >= 0):
             raise InputError(f"the friction coefficient must be finite and >= 0, got "
                              f"{self.coefficient}", key="contact.friction.coefficient")
+        if self.type == "tresca" and callable(self.threshold) and self.threshold_at is None:
+            raise InputError("a Tresca threshold that varies needs threshold_at (its values at "
+                             "points)", key="contact.friction.threshold")
 
     def bound(self, pressure, x):
         """The threshold s (UFL): 𝔣 p, or g_T where p > 0."""
@@ -68,11 +74,19 @@ class Friction:
         threshold = self.threshold(x) if callable(self.threshold) else self.threshold
         return ufl.conditional(ufl.gt(pressure, 0.0), threshold, 0.0)
 
-    def bound_derivative(self, slope_times_du, x):
+    def bound_derivative(self, dpressure):
         """ds along du (UFL): 𝔣 dp for Coulomb, 0 for Tresca."""
+        return self.coefficient * dpressure if self.type == "coulomb" else 0.0
+
+    def bound_at(self, pressure: np.ndarray, points: np.ndarray) -> np.ndarray:
+        """s at nodes (numpy) with pressures p ≥ 0 at ``points`` (N, 3)."""
         if self.type == "coulomb":
-            return self.coefficient * slope_times_du
-        return 0.0
+            return self.coefficient * pressure
+        if callable(self.threshold):
+            values = np.asarray(self.threshold_at(points.T), dtype=np.float64)
+        else:
+            values = np.full(len(pressure), float(self.threshold))
+        return np.where(pressure > 0, np.broadcast_to(values, pressure.shape), 0.0)
 
 
 def tangential(w, normal):
@@ -80,17 +94,27 @@ def tangential(w, normal):
     return w - ufl.dot(w, normal) * normal
 
 
-def friction_terms(friction: Friction, u, u_old, du, v, normal, pressure, dpressure, ds,
-                   epsilon: float):
-    """(residual, Jacobian) of the friction traction on the part (see the module docstring):
-    ``pressure`` the compliance pressure p(u) and ``dpressure`` its derivative along du (UFL)."""
+def return_mapping(t_trial: np.ndarray, bound: np.ndarray) -> np.ndarray:
+    """t_trial (N, d) projected onto the discs |t| ≤ bound (N,)."""
+    size = np.linalg.norm(t_trial, axis=1)
+    scale = np.where(size > bound, bound / np.where(size > 0, size, 1.0), 1.0)
+    return t_trial * scale[:, None]
+
+
+def friction_terms(friction: Friction, u, u_old, t_old, du, v, normal, pressure, dpressure, ds,
+                   stiffness: float):
+    """(residual, Jacobian) of the friction traction (see the module docstring): ``pressure``
+    the compliance pressure p(u) and ``dpressure`` its derivative along du (UFL), ``t_old`` the
+    traction of the last accepted step."""
     x = ufl.SpatialCoordinate(u.ufl_domain())
-    t = tangential(u - u_old, normal)
-    dt = tangential(du, normal)
-    size = ufl.sqrt(ufl.dot(t, t) + epsilon ** 2)
+    trial = tangential(t_old, normal) - stiffness * tangential(u - u_old, normal)
+    dtrial = -stiffness * tangential(du, normal)
+    size = ufl.sqrt(ufl.dot(trial, trial) + 1e-300)
     s = friction.bound(pressure, x)
-    residual = s * ufl.dot(t, v) / size * ds
-    direction_change = dt / size - t * ufl.dot(t, dt) / size ** 3
-    jacobian = (friction.bound_derivative(dpressure, x) * ufl.dot(t, v) / size
-                + s * ufl.dot(direction_change, v)) * ds
-    return residual, jacobian
+    sticks = ufl.le(size, s)
+    traction = ufl.conditional(sticks, trial, s * trial / size)
+    direction = trial / size
+    slip = (s / size * (dtrial - direction * ufl.dot(direction, dtrial))
+            + friction.bound_derivative(dpressure) * direction)
+    dtraction = ufl.conditional(sticks, dtrial, slip)
+    return -ufl.dot(traction, v) * ds, -ufl.dot(dtraction, v) * ds

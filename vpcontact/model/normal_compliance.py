@@ -109,10 +109,10 @@ class NormalCompliance:
 
     def part(self, u, facet_tags, equilibrium=None, name: str = "contact",
              exclude: np.ndarray = np.zeros(0, dtype=np.int32),
-             rotate: Optional[bool] = None) -> "CompliancePart":
+             rotate: Optional[bool] = None, shear_modulus: float = 1.0) -> "CompliancePart":
         """This condition on the mesh of ``u``: a :class:`~vpcontact.model.contact.ContactPart`
-        (see :class:`CompliancePart`)."""
-        return CompliancePart(self, u, facet_tags, name, exclude)
+        (see :class:`CompliancePart`; ``shear_modulus``: the body's, for friction's stick)."""
+        return CompliancePart(self, u, facet_tags, name, exclude, shear_modulus)
 
     def _gap(self, mesh):
         if callable(self.gap) and not isinstance(self.gap, ufl.core.expr.Expr):
@@ -166,7 +166,8 @@ class CompliancePart:
     driven = False
     moving = False
 
-    def __init__(self, law: NormalCompliance, u, facet_tags, name: str, exclude: np.ndarray):
+    def __init__(self, law: NormalCompliance, u, facet_tags, name: str, exclude: np.ndarray,
+                 shear_modulus: float = 1.0):
         from dolfinx import fem
         from vpcontact.model.contact import unrolled
         V = u.function_space
@@ -178,14 +179,15 @@ class CompliancePart:
         self.force_dofs = unrolled(bs, blocks, exclude)
         self.node_blocks = np.unique(self.force_dofs // bs).astype(np.int32)
         self._nodes = None
-        self._u_old = None  # u at the last accepted step (friction's slip increment)
+        self._u_old = self._t_old = None  # u and the friction traction at the last step
         if law.friction is not None:
-            self._u_old = fem.Function(V, name="u_old")
             from mpi4py import MPI
+            from vpcontact.model.friction import STICK_STIFFNESS
+            self._u_old = fem.Function(V, name="u_old")
+            self._t_old = fem.Function(V, name="friction_traction")
             extent = V.mesh.comm.allreduce(float(np.ptp(V.mesh.geometry.x, axis=0).max()),
                                            op=MPI.MAX)
-            from vpcontact.model.friction import SLIP_LENGTH
-            self._epsilon = SLIP_LENGTH * extent
+            self.stick_stiffness = STICK_STIFFNESS * shear_modulus / extent
 
     @property
     def nodes(self):
@@ -200,10 +202,10 @@ class CompliancePart:
         return self._nodes
 
     def snes_defaults(self, linear_law: bool) -> dict:
-        """SNES options this part needs: with friction, the critical-point line search (the slip
-        direction turns by up to π within ε of zero slip: at the onset of slip, full, l2 and
-        backtracking steps cycle for thousands of step halvings where ``cp`` converges in 4–8
-        iterations, measured on a block pressed and dragged, tests/test_friction.py); for α < 1
+        """SNES options this part needs: with friction, the critical-point line search (measured
+        on the block pressed, then dragged, of tests/test_friction.py: 16, 11, 8, 12, 11 Newton
+        iterations in the pressing steps, where nodes switch between stick and slip, against
+        17, 13, 13, 13, 13 with full steps and step cuts with backtracking); for α < 1
         with a law linear in ε, a backtracking line search (p ↦ p^α is concave: full steps can
         overshoot past contact onset and cycle)."""
         if self.law.friction is not None:
@@ -217,23 +219,53 @@ class CompliancePart:
             from vpcontact.model.friction import friction_terms
             pressure = law.pressure(u, normal)
             dpressure = (1.0 / law.mu) * law.slope(u, normal) * ufl.dot(du, normal)
-            r, j = friction_terms(law.friction, u, self._u_old, du, v, normal, pressure,
-                                  dpressure, ds(law.tag), self._epsilon)
+            r, j = friction_terms(law.friction, u, self._u_old, self._t_old, du, v, normal,
+                                  pressure, dpressure, ds(law.tag), self.stick_stiffness)
             residual, jacobian = residual + r, jacobian + j
         return residual, jacobian
+
+    def friction_state(self) -> Optional[dict]:
+        """At this rank's nodes, with friction: the tangential traction t (N, d), the slip
+        increment of the step Δu_τ (N, d) and whether the node slips (|t| at its bound)."""
+        if self.law.friction is None:
+            return None
+        from vpcontact.model.friction import return_mapping
+        cd, bs = self.nodes, self.u.function_space.dofmap.index_map_bs
+        rows = cd.nodes[:, None] * bs + np.arange(bs)
+        normals = cd.normals
+        def tangential(values):
+            w = values[rows]
+            return w - np.einsum("ij,ij->i", w, normals)[:, None] * normals
+        slip = tangential(self.u.x.array - self._u_old.x.array)
+        trial = tangential(self._t_old.x.array) - self.stick_stiffness * slip
+        pressure = -self.law.normal_stress(cd.normal_displacement(self.u) - cd.gap)
+        bound = self.law.friction.bound_at(pressure, cd.points)
+        traction = return_mapping(trial, bound)
+        slips = np.linalg.norm(trial, axis=1) > bound * (1 + 1e-12)
+        return {"traction": traction, "slip": slip, "slips": slips, "rows": rows}
 
     def update(self, time: float) -> None:
         pass
 
     def commit(self, time: float) -> None:
-        if self._u_old is not None:
-            self._u_old.x.array[:] = self.u.x.array
+        if self._u_old is None:
+            return
+        state = self.friction_state()  # the return mapping at the nodes, with the step's slip
+        self._t_old.x.array[:] = 0.0
+        self._t_old.x.array[state["rows"]] = state["traction"]
+        self._t_old.x.scatter_forward()
+        self._u_old.x.array[:] = self.u.x.array
 
     def state(self) -> dict:
         return {}
 
-    def restore(self, state: dict, time: float) -> None:
-        self.commit(time)  # (u is the restored one: the slip starts from it)
+    def arrays(self) -> dict:
+        return {} if self._t_old is None else {"friction_traction": self._t_old.x.array}
+
+    def restore(self, state: dict, time: float, arrays: Optional[dict] = None) -> None:
+        if self._u_old is not None:  # (u is the restored one: the slip starts from it)
+            self._u_old.x.array[:] = self.u.x.array
+            self._t_old.x.array[:] = (arrays or {}).get("friction_traction", 0.0)
 
     def pressure(self) -> np.ndarray:
         cd = self.nodes

@@ -80,7 +80,7 @@ class Signorini:
 
     def part(self, u: fem.Function, facet_tags, equilibrium, name: str = "contact",
              exclude: np.ndarray = np.zeros(0, dtype=np.int32),
-             rotate: Optional[bool] = None) -> "SignoriniPart":
+             rotate: Optional[bool] = None, shear_modulus: float = 1.0) -> "SignoriniPart":
         """This condition on the mesh of ``u``: a :class:`~vpcontact.model.contact.ContactPart`
         (see :class:`SignoriniPart`)."""
         kind = SignoriniPart if self.force is None else DrivenSignoriniPart
@@ -485,8 +485,12 @@ class SignoriniPart:
         """What a checkpoint must hold to continue (JSON-able)."""
         return {}
 
-    def restore(self, state: dict, time: float) -> None:
-        """Continue from :meth:`state` at ``time``."""
+    def arrays(self) -> dict:
+        """Arrays (this rank's) a checkpoint must hold to continue."""
+        return {}
+
+    def restore(self, state: dict, time: float, arrays: Optional[dict] = None) -> None:
+        """Continue from :meth:`state` (and :meth:`arrays`) at ``time``."""
         self.update(time)
 
     def pressure(self) -> np.ndarray:
@@ -646,7 +650,7 @@ class DrivenSignoriniPart(SignoriniPart):
     def state(self) -> dict:
         return {"committed": [list(c) for c in self._committed]}
 
-    def restore(self, state: dict, time: float) -> None:
+    def restore(self, state: dict, time: float, arrays: Optional[dict] = None) -> None:
         self._committed = [tuple(c) for c in state["committed"]]
         self._time = time
         self._linearize(self._committed[-1][1])

@@ -189,7 +189,8 @@ class QuasistaticProblem:
         for name, condition in self._contact_laws.items():
             try:
                 part = condition.part(self.u, facet_tags, residual, name=name, exclude=taken,
-                                      rotate=rotate_contact)
+                                      rotate=rotate_contact,
+                                      shear_modulus=_shear_modulus(law))
             except InputError as err:
                 err.part = name
                 raise
@@ -207,8 +208,7 @@ class QuasistaticProblem:
         # A body whose free rigid motions only its contacts hold (see vpcontact.solver.held).
         self.held = None
         if free:
-            el = getattr(law, "elasticity", None)
-            shear = el.shear_modulus if el is not None else law.E
+            shear = _shear_modulus(law)
             self.held = HeldByContacts(self.u, free, shear)
             terms.append(self.held.terms(v, du))
             self._free_motions = free
@@ -514,6 +514,8 @@ class QuasistaticProblem:
             arrays.update({f"law_{k}": v for k, v in self.law.internal_state().items()})
         if self._bdf2 is not None and self._bdf2.w_prev is not None:
             arrays["bdf2_w_prev"] = self._bdf2.w_prev
+        for i, part in enumerate(self.contacts):
+            arrays.update({f"contact{i}_{k}": v for k, v in part.arrays().items()})
         solver_flags, solver_arrays = self.solver.checkpoint()
         arrays.update({f"solver_{k}": v for k, v in solver_arrays.items()})
         scalars = {"time": float(self.time.value), "dt": self.dt, "step_index": self.step_index,
@@ -556,8 +558,11 @@ class QuasistaticProblem:
         self._tangent_key = tuple(key) if key is not None else None
         if self.dirichlet.moving:
             self.dirichlet.update(scalars["time"])
-        for part, state in zip(self.contacts, scalars.get("contacts", [{}] * len(self.contacts))):
-            part.restore(state, scalars["time"])
+        for i, (part, state) in enumerate(zip(self.contacts, scalars.get(
+                "contacts", [{}] * len(self.contacts)))):
+            prefix = f"contact{i}_"
+            part.restore(state, scalars["time"], {k[len(prefix):]: v for k, v in arrays.items()
+                                                  if k.startswith(prefix)})
         if self.variables is not None:
             self.variables.refresh()
         if any(p.moving for p in self.contacts):
@@ -658,6 +663,11 @@ def stress_quadrature_degree(mesh, degree: int) -> int:
     if mesh.ufl_cell().cellname() in ("quadrilateral", "hexahedron"):
         return 2 * degree
     return max(2 * (degree - 1), 1)
+
+
+def _shear_modulus(law) -> float:
+    """G of the law's elasticity (E in 1-D), the body's stiffness scale."""
+    return law.elasticity.shear_modulus
 
 
 def _named(contact) -> dict:
