@@ -198,3 +198,25 @@ def test_show_writes_friction_back():
                      'friction = { type = "tresca", threshold = "1 + x[0]" }'):
         scene = loads_text(DRAGGED.replace("FRICTION", friction))
         assert loads_text(scene.to_toml()) == scene and scene.contact.friction is not None
+
+
+def test_contact_csv_holds_the_friction_state(shared_tmp_path):
+    """With friction contact.csv adds |t|, the step's slip, the accumulated slip and whether the
+    node slipped: sliding, every node of the bottom slips with |t| = 𝔣 p, and the slips add up."""
+    scene = write_shared(shared_tmp_path / "csv.toml", DRAGGED.replace(
+        "FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }'))
+    out = shared_tmp_path / "csv"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    lines = (out / "contact.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    assert header[-4:] == ["tangential_traction", "slip_increment", "slip", "slipping"], header
+    rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    col = {name: i for i, name in enumerate(header)}
+    last = rows[np.isclose(rows[:, 0], 1.0)]
+    inside = last[:, col["pressure"]] < 0
+    assert inside.sum() >= 10 and np.all(last[inside, col["slipping"]] == 1)
+    assert np.allclose(last[inside, col["tangential_traction"]],
+                       -0.3 * last[inside, col["pressure"]], rtol=1e-8)
+    for x in np.unique(rows[:, 1]):  # the accumulated slip is the sum of the increments
+        node = rows[rows[:, 1] == x]
+        assert np.allclose(np.cumsum(node[:, col["slip_increment"]]), node[:, col["slip"]])

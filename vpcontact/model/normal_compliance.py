@@ -180,6 +180,7 @@ class CompliancePart:
         self.node_blocks = np.unique(self.force_dofs // bs).astype(np.int32)
         self._nodes = None
         self._u_old = self._t_old = None  # u and the friction traction at the last step
+        self.last_friction = None  # the accepted step's friction_state()
         if law.friction is not None:
             from mpi4py import MPI
             from vpcontact.model.friction import STICK_STIFFNESS
@@ -251,6 +252,7 @@ class CompliancePart:
         if self._u_old is None:
             return
         state = self.friction_state()  # the return mapping at the nodes, with the step's slip
+        self.last_friction = state
         self._t_old.x.array[:] = 0.0
         self._t_old.x.array[state["rows"]] = state["traction"]
         self._t_old.x.scatter_forward()

@@ -139,10 +139,15 @@ def history_arrays(history) -> dict:
     """The contact history's records (rank 0) as arrays."""
     if not history.times:
         return {"history_times": np.zeros(0)}
-    return {"history_times": np.array(history.times),
-            "history_un": np.array(history.normal_displacement),
-            "history_pressure": np.array(history.pressure),
-            "history_gap": np.array(history.gaps)}
+    arrays = {"history_times": np.array(history.times),
+              "history_un": np.array(history.normal_displacement),
+              "history_pressure": np.array(history.pressure),
+              "history_gap": np.array(history.gaps)}
+    if history.friction:
+        arrays.update({"history_traction": np.array(history.traction),
+                       "history_slip": np.array(history.slip),
+                       "history_slipping": np.array(history.slipping)})
+    return arrays
 
 
 def forces_arrays(forces) -> dict:

@@ -164,6 +164,12 @@ class ContactHistory:
         self.times: list[float] = []
         self.normal_displacement: list[np.ndarray] = []
         self.pressure: list[np.ndarray] = []
+        #: friction (when some part has it): per record, |t| and |Δu_τ| of the step and
+        #: whether the node slipped
+        self.friction = any(getattr(p.law, "friction", None) is not None for p in self.parts)
+        self.traction: list[np.ndarray] = []
+        self.slip: list[np.ndarray] = []
+        self.slipping: list[np.ndarray] = []
 
     def _gathered(self, value) -> np.ndarray:
         """``value(part)`` of every part, gathered on rank 0 and joined part after part."""
@@ -180,11 +186,18 @@ class ContactHistory:
         un = self._gathered(lambda p: p.nodes.normal_displacement(self.problem.u))
         pressure = self._gathered(lambda p: p.pressure())
         gap = self._gathered(lambda p: p.nodes.gap)
+        if self.friction:
+            traction, slip, slipping = (self._gathered(lambda p, k=k: _friction(p, k))
+                                        for k in ("traction", "slip", "slips"))
         if self.comm.rank == 0:
             self.gaps.append(gap)
             self.times.append(t)
             self.normal_displacement.append(un)
             self.pressure.append(pressure)
+            if self.friction:
+                self.traction.append(traction)
+                self.slip.append(slip)
+                self.slipping.append(slipping)
 
     def restore(self, arrays: dict) -> None:
         """The records of a checkpoint (:mod:`vpcontact.output.checkpoint`), on rank 0."""
@@ -195,6 +208,9 @@ class ContactHistory:
             self.normal_displacement = list(arrays["un"])
             self.pressure = list(arrays["pressure"])
             self.gaps = list(arrays["gap"])
+            if self.friction:
+                self.traction, self.slip, self.slipping = (
+                    list(arrays[k]) for k in ("traction", "slip", "slipping"))
 
     def closest_approach(self, index: int = 0) -> Optional[dict]:
         """For the part ``index``: whether it ever touched after the initial state (normal
@@ -224,18 +240,36 @@ class ContactHistory:
         position along its normal (it changes when the obstacle moves), ``clearance`` =
         gap − u_normal the current one (0 where the node touches)."""
         several = len(self.parts) > 1
+        friction = ",tangential_traction,slip_increment,slip,slipping" if self.friction else ""
 
         def write():
             names = [f",{self.names[i]}" if several else "" for i in self.part]
+            slip_sum = np.zeros(len(self.points))
             with open(path, "w") as f:
-                f.write("t,x,y,z,u_normal,gap,clearance,pressure" + (",part" if several else "")
-                        + "\n")
-                for t, un, gap, p in zip(self.times, self.normal_displacement, self.gaps,
-                                         self.pressure):
-                    for (x, y, z), u_i, g_i, p_i, name in zip(self.points, un, gap, p, names):
+                f.write("t,x,y,z,u_normal,gap,clearance,pressure" + friction
+                        + (",part" if several else "") + "\n")
+                for k, (t, un, gap, p) in enumerate(zip(self.times, self.normal_displacement,
+                                                        self.gaps, self.pressure)):
+                    extra = [""] * len(self.points)
+                    if self.friction:
+                        slip_sum += self.slip[k]
+                        extra = [f",{a:.10e},{b:.10e},{c:.10e},{int(d)}" for a, b, c, d in zip(
+                            self.traction[k], self.slip[k], slip_sum, self.slipping[k])]
+                    for (x, y, z), u_i, g_i, p_i, e, name in zip(self.points, un, gap, p, extra,
+                                                                 names):
                         f.write(f"{t:.10g},{x:.10g},{y:.10g},{z:.10g},"
-                                f"{u_i:.10e},{g_i:.10e},{g_i - u_i:.10e},{p_i:.10e}{name}\n")
+                                f"{u_i:.10e},{g_i:.10e},{g_i - u_i:.10e},{p_i:.10e}{e}{name}\n")
         on_rank0(self.comm, write)
+
+
+def _friction(part, key: str) -> np.ndarray:
+    """Per node of ``part``: |t| ("traction"), |Δu_τ| of the last accepted step ("slip") or
+    whether it slipped ("slips"); zeros before the first step or without friction."""
+    state = getattr(part, "last_friction", None)
+    if state is None:
+        return np.zeros(len(part.nodes.gap))
+    value = state[key]
+    return np.linalg.norm(value, axis=1) if value.ndim == 2 else value.astype(float)
 
 
 def _gather(comm, array: np.ndarray) -> np.ndarray:

@@ -493,7 +493,9 @@ class StepSolver:
         if self._bounds is not None:
             self._snap_to_bounds(self._x)
         self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
+        start = _time.perf_counter()  # (kernel and assembly outside SNES count as SNES work,
         self._round_off_scale = max(self._force_scale, self._free_residual_norm())
+        self.timings["snes"] += _time.perf_counter() - start  # so that the split adds up)
         its = 0
         snes = self.snes
         if try_unconstrained and self._free_snes is not None:
@@ -511,8 +513,10 @@ class StepSolver:
             self.vi_solves += self._bounds is not None
         finite = self.u.function_space.mesh.comm.allreduce(
             bool(np.isfinite(self._x.array).all()), op=MPI.LAND)
+        start = _time.perf_counter()
         if reason > 0 or finite:  # (a diverged, non-finite iterate is not loaded: the kernels
             self._load_iterate(self._x)  # refuse it, and the caller rolls the step back)
+        self.timings["snes"] += _time.perf_counter() - start
         if reason <= 0:
             ksp_reason = snes.getKSP().getConvergedReason()
             detail = f"last linear solve reason {ksp_reason}" if ksp_reason < 0 else ""
