@@ -19,7 +19,7 @@ from mpi4py import MPI
 from dolfinx import mesh as dmesh
 
 from vpcontact import cli
-from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain
+from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain, Signorini
 import ufl
 
 from vpcontact.model.friction import Friction
@@ -182,14 +182,74 @@ def test_friction_errors_are_located(shared_tmp_path, capsys, friction, key, mes
         assert re.search(rf"bad\.toml:\d+: {key}: .*{message}", err), err
 
 
-def test_friction_on_a_signorini_part_is_refused(shared_tmp_path, capsys):
+def test_friction_on_a_force_driven_obstacle_is_refused(shared_tmp_path, capsys):
     text = DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
-        "mu = 1e-3\n", "").replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+        "mu = 1e-3\n", 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n'
+        'force = [0, "t"]\n').replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
     scene = write_shared(shared_tmp_path / "sig.toml", text)
     assert cli.main(["validate", str(scene)]) == 2
     err = capsys.readouterr().err
     if MPI.COMM_WORLD.rank == 0:
-        assert re.search(r"sig\.toml:\d+: contact\.friction: .*friction on a Signorini part", err), err
+        assert re.search(r"sig\.toml:\d+: contact\.friction: .*driven by a force", err), err
+
+
+def _signorini_block(friction, floor_motion=None, drag=0.02):
+    """The dragged block on a rigid floor (Signorini) with friction; or held by its top while
+    the floor slides under it (``floor_motion``)."""
+    comm = MPI.COMM_WORLD
+    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [16, 4])
+    tags = tag_facets(msh, {1: lambda x: np.isclose(x[1], 0.25), 2: lambda x: np.isclose(x[1], 0.0)})
+
+    def ux(x, t):
+        return np.full(x.shape[1], 0.0 if floor_motion else drag * max(t - 0.5, 0.0))
+
+    def uy(x, t):
+        return np.full(x.shape[1], -0.002 * min(t / 0.5, 1.0))
+
+    floor = Signorini(2, obstacle=lambda x: x[1], max_distance=1.0, friction=friction,
+                      translation=floor_motion)
+    return QuasistaticProblem(msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
+                              dirichlet=[Dirichlet(1, (ux, uy), "top")], contact=floor)
+
+
+@pytest.mark.parametrize("kind", ["coulomb", "tresca"])
+def test_signorini_full_slip(kind):
+    """The block pressed onto a rigid floor (Signorini, nodal friction in the contact frames),
+    then dragged: tangential force = 0.3 × normal force (Coulomb) or = 2 × the contact length
+    (Tresca) to 1e-8 while it slides; at most 6 Newton iterations per step."""
+    friction = (Friction("coulomb", coefficient=0.3) if kind == "coulomb"
+                else Friction("tresca", threshold=2.0))
+    problem = _signorini_block(friction)
+    for step in advance(problem, 1.0, StepControl(0.1)):
+        assert step.newton_iterations <= 6, step
+        if step.time >= 0.7 - 1e-9:
+            _, force = problem.support_forces()
+            expected = 0.3 * force[1] if kind == "coulomb" else 2.0 * 1.0
+            assert -force[0] == pytest.approx(expected, rel=1e-8), force
+    assert problem.contact_monitor.report().active > 10
+
+
+def test_signorini_sticks_below_the_limit():
+    problem = _signorini_block(Friction("coulomb", coefficient=10.0), drag=2e-4)
+    for _ in advance(problem, 1.0, StepControl(0.1)):
+        pass
+    part = problem.contacts[0]
+    assert part.friction.last is not None
+    assert not MPI.COMM_WORLD.allreduce(bool(part.friction.last["slips"].any()), op=MPI.LOR)
+    _, force = problem.support_forces()
+    assert 0 < -force[0] < 10.0 * force[1]
+
+
+def test_a_rigid_floor_sliding_under_a_held_block_drags_it():
+    """The slip is relative to the obstacle: the floor translates by 0.02 (t − 0.5) under the
+    block, which its top holds; the friction force on the block is +𝔣 × normal (along the
+    floor's motion)."""
+    problem = _signorini_block(Friction("coulomb", coefficient=0.3),
+                               floor_motion=lambda t: np.array([0.02 * max(t - 0.5, 0.0), 0.0, 0.0]))
+    for step in advance(problem, 1.0, StepControl(0.1)):
+        if step.time >= 0.7 - 1e-9:
+            _, force = problem.support_forces()
+            assert force[0] == pytest.approx(0.3 * force[1], rel=1e-8), force
 
 
 def test_show_writes_friction_back():

@@ -71,8 +71,12 @@ class ContactPart(Protocol):
     def bound_gaps(self) -> np.ndarray:
         """Bounded parts: the right-hand sides of their bounds at ``nodes.dofs``."""
 
-    def commit(self, time: float) -> None:
-        """The step to ``time`` is accepted."""
+    def solver_terms(self) -> list:
+        """Nodal terms the step solver adds to its residual and Jacobian (friction on a
+        Signorini part: :class:`~vpcontact.model.nodal_friction.NodalFriction`), or []."""
+
+    def commit(self, time: float, x=None) -> None:
+        """The step to ``time`` is accepted (``x``: the step solver's unknowns there)."""
 
     def state(self) -> dict:
         """What a checkpoint must hold to continue (JSON-able; {} for most parts)."""

@@ -248,7 +248,10 @@ class CompliancePart:
     def update(self, time: float) -> None:
         pass
 
-    def commit(self, time: float) -> None:
+    def solver_terms(self) -> list:
+        return []
+
+    def commit(self, time: float, x=None) -> None:
         if self._u_old is None:
             return
         state = self.friction_state()  # the return mapping at the nodes, with the step's slip

@@ -350,10 +350,11 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
         center = (0.0,) * 3 if turn is None else turn.center + (0.0,) * (3 - len(turn.center))
         return Signorini(tag, obstacle=phi, max_distance=spec.max_distance or 1e3,
                          obstacle_moves=moves, translation=translation, rotation=rotation,
-                         rotation_center=center)
+                         rotation_center=center, friction=_friction(spec.friction))
     if gap is None or gap.is_constant:
-        return Signorini(tag, gap=0.0 if gap is None else gap.value())
-    return Signorini(tag, gap=lambda x: gap.numpy(x))
+        return Signorini(tag, gap=0.0 if gap is None else gap.value(),
+                         friction=_friction(spec.friction))
+    return Signorini(tag, gap=lambda x: gap.numpy(x), friction=_friction(spec.friction))
 
 
 def _friction(spec) -> Optional[Friction]:
@@ -365,7 +366,8 @@ def _friction(spec) -> Optional[Friction]:
     threshold = spec.threshold
     if threshold.is_constant:
         return Friction("tresca", threshold=threshold.value())
-    return Friction("tresca", threshold=lambda x: threshold.ufl(x, 0.0))
+    return Friction("tresca", threshold=lambda x: threshold.ufl(x, 0.0),
+                    threshold_at=lambda x: threshold.numpy(x))
 
 
 def _check_times(scene: Scene, count: int = 16) -> np.ndarray:

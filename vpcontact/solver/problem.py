@@ -227,7 +227,8 @@ class QuasistaticProblem:
         # Only what is called for: a constitutive update linear in ε with no compliance term
         # has a Jacobian that changes with the step size only; it is factorized once per size.
         # (an obstacle driven by a force changes the unknowns' map P at every step)
-        constant_jacobian = (law.linear_in_strain and not terms
+        nodal_terms = [t for p in self.contacts for t in p.solver_terms()]
+        constant_jacobian = (law.linear_in_strain and not terms and not nodal_terms
                              and not any(p.driven for p in self.contacts))
         self.fields.compile(residual, jacobian)
         rotation = None
@@ -242,10 +243,13 @@ class QuasistaticProblem:
                                  load=sum(external[1:], external[0]) if external else None,
                                  point_forces=self._point_forces if self._point_loads else None,
                                  constant_jacobian=constant_jacobian, variables=self.variables,
+                                 nodal_terms=nodal_terms,
                                  linear=linear)
         bounds = merged_bounds(self.u, self.contacts)
         if bounds is not None:
             self.solver.set_bounds(*bounds)
+        for term in nodal_terms:
+            term.bind(scale, self.dirichlet.prescribed)
         self._correction_expr = None  # compiled on first use (outputs of the mixed formulation)
         self._contact_active = False  # after the last accepted step
         self.step_index = 0
@@ -352,7 +356,7 @@ class QuasistaticProblem:
             self._bdf2.accept(self.state, dt)  # before the commit: it keeps w at t_{n-1}
         self.state.commit()
         for part in self.contacts:
-            part.commit(t_new)
+            part.commit(t_new, self.solver.unknowns_array())
         if self.held is not None:
             self.held.commit()
         if hasattr(self.law, "commit"):  # laws with internal variables of their own

@@ -60,6 +60,8 @@ class StepSolver:
             itself.
         linear: "direct", "iterative" or "auto" (by size), see :mod:`vpcontact.solver.linear`;
             user options (``ksp_*``, ``pc_*``, ``lagged_*``) override its choices.
+        nodal_terms: objects with ``residual(x, b)`` and ``jacobian(x, A)`` that add their
+            nodal terms to SNES's residual and Jacobian at x (friction on Signorini parts).
     """
 
     def __init__(self, fields, bcs: Sequence[fem.DirichletBCMetaClass],
@@ -67,7 +69,7 @@ class StepSolver:
                  options_prefix: Optional[str] = None, scale: float = 1.0, load=None,
                  point_forces: Optional[Callable[[], tuple]] = None,
                  constant_jacobian: bool = False, variables=None,
-                 linear: str = "direct"):
+                 linear: str = "direct", nodal_terms: Sequence = ()):
         if not scale > 0:
             raise ValueError(f"scale must be > 0, got {scale}")
         self.scale = float(scale)
@@ -77,6 +79,7 @@ class StepSolver:
         self.bcs = list(bcs)
         self._refresh = refresh
         self._P = variables
+        self._nodal = list(nodal_terms)
         driven = variables is not None and not variables.square
         self._b = variables.create_vector() if driven else fields.create_vector()
         self._xp = fields.physical_vector()  # the physical unknowns (u's own vector for u alone)
@@ -156,6 +159,10 @@ class StepSolver:
                         "snes": 0.0}
         PETSc.Log.begin()  # PETSc's event log, for the time spent in KSPSolve
         self._ksp_event = PETSc.Log.Event("KSPSolve")
+
+    def unknowns_array(self) -> np.ndarray:
+        """SNES's unknowns of the last solve (this rank's entries)."""
+        return self._x.getArray(readonly=True)
 
     @property
     def unknowns(self) -> int:
@@ -428,6 +435,8 @@ class StepSolver:
         self.fields.assemble_residual(b, self._xp, self.bcs, self._free_point_forces())
         if self._P is not None:
             self._P.residual(b, b_snes)
+        for term in self._nodal:
+            term.residual(x, b_snes)
         self.timings["residual"] += _time.perf_counter() - start
 
     def _jacobian(self, snes, x, A_snes, P) -> None:
@@ -444,6 +453,8 @@ class StepSolver:
         if self._P is not None:
             self._P.jacobian(A, A_snes)
             self._P.stabilize(A_snes, x, self._b, self._bounds)
+        for term in self._nodal:
+            term.jacobian(x, A_snes)
         if self._block is not None:
             self._block.update()
         self._jacobian_dt = self.dt

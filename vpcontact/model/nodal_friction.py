@@ -1,0 +1,160 @@
+# SPDX-License-Identifier: MIT
+"""Coulomb and Tresca friction on a Signorini part: nodal, in the contact frames, beside SNES VI.
+
+Frictionless Signorini is a bound on one unknown per contact node, ũ_ν ≤ g (in the node's
+frame, :mod:`vpcontact.model.frames`). Its normal force λ_i ≥ 0 is the variational
+inequality's multiplier: at the solution it is what the residual of that unknown asks of the
+obstacle, λ_i = −s_i F̃_ν,i (s_i the frame's sign), and 0 where the node is free. Friction acts on
+the node's other (tangential) unknowns as a nodal force with the same return mapping as on a
+deformable foundation (:mod:`vpcontact.model.friction`):
+
+    f_trial = f_{n−1} − k_i Δũ_τ,i,   f = f_trial if |f_trial| ≤ b_i, else b_i f_trial/|f_trial|,
+    b_i = 𝔣 λ_i (Coulomb) or g_T(x_i) A_i where λ_i > 0 (Tresca),
+
+Δũ_τ,i the node's tangential slip over the step relative to the obstacle (its own translation
+subtracted), k_i = STICK_STIFFNESS · G/L · A_i and A_i = ∫_Γ3 φ_i da the node's share of Γ3. The
+residual of the tangential unknowns gains −f; their Jacobian rows gain −∂f/∂x̃ — in slip this
+includes 𝔣 f̂ ∂λ_i/∂x̃ = −𝔣 s_i f̂ (the normal unknown's Jacobian row), whose columns are the
+node's neighbours, already in the pattern. So each step is still one SNES VI solve, semi-smooth
+Newton with the exact generalised Jacobian (LU: it is not symmetric).
+
+P1 displacements only (a P2 vertex function integrates to zero on a facet: no lumped areas).
+"""
+
+from __future__ import annotations
+
+from typing import Optional
+
+import numpy as np
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from vpcontact.errors import InputError
+from vpcontact.model.friction import STICK_STIFFNESS, return_mapping
+
+
+class NodalFriction:
+    """The friction of one Signorini part, as nodal terms of the step's SNES residual and
+    Jacobian (see the module docstring).
+
+    Args:
+        part: the :class:`~vpcontact.model.signorini.SignoriniPart` (framed nodes).
+        shear_modulus: the body's G.
+    """
+
+    def __init__(self, part, shear_modulus: float):
+        V = part.u.function_space
+        if V.ufl_element().degree() != 1:
+            raise InputError("friction on a Signorini part needs P1 displacements (degree = 1, "
+                             "formulation = \"displacement\")", key="contact.friction")
+        cd = part.nodes
+        if cd.frames is None:
+            raise ValueError("friction on a Signorini part needs its nodes in frames")
+        self.part = part
+        self.friction = part.law.friction
+        mesh = V.mesh
+        self.bs = bs = V.dofmap.index_map_bs
+        extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
+        self.comm = mesh.comm
+        self.areas = np.abs(part.monitor.weights)
+        self.stiffness = STICK_STIFFNESS * shear_modulus / extent * self.areas
+        self.slots = cd.dofs                       # the normal unknown of each node
+        self.signs = cd.signs
+        others = [np.array([k for k in range(bs) if k != s]) for s in cd.frames.slots]
+        self.tangential = np.array([cd.nodes[i] * bs + o for i, o in enumerate(others)],
+                                   dtype=np.int32).reshape(len(cd.nodes), bs - 1)
+        self.free = np.ones(self.tangential.shape, dtype=bool)  # tangential rows not prescribed
+        self.scale = 1.0
+        self.force_old = np.zeros(self.tangential.shape)  # f_{n−1}
+        self.x_old = np.zeros(self.tangential.shape)      # x̃_τ at the last step (SNES units)
+        self.shift = np.zeros(self.tangential.shape)      # the obstacle's tangential motion
+        self._lam = np.zeros(len(self.slots))            # λ at the last residual
+        self.last: Optional[dict] = None                  # the accepted step's state
+        blocks = cd.frames.blocks
+        self._frame_tangents = np.array([blocks[i][:, o] for i, o in enumerate(others)])
+
+    def bind(self, scale: float, dirichlet_dofs: np.ndarray) -> None:
+        """The solver's displacement scale and its Dirichlet dofs (tangential rows they hold get
+        no friction)."""
+        self.scale = scale
+        self.free = ~np.isin(self.tangential, dirichlet_dofs)
+
+    # -- the state at an iterate ------------------------------------------------------------
+    def _trial(self, x: np.ndarray):
+        slip = (x[self.tangential] - self.x_old) * self.scale - self.shift
+        slip = np.where(self.free, slip, 0.0)
+        return self.force_old - self.stiffness[:, None] * slip, slip
+
+    def _bound(self, lam: np.ndarray) -> np.ndarray:
+        if self.friction.type == "coulomb":
+            return self.friction.coefficient * lam
+        return self.friction.bound_at(lam, self.part.nodes.points) * self.areas
+
+    def move(self, delta: np.ndarray) -> None:
+        """The obstacle translates by ``delta`` (dim,) over the step: the slip is relative."""
+        self.shift = np.einsum("nkt,k->nt", self._frame_tangents, delta[:self.bs])
+
+    def state(self, x: np.ndarray, lam: np.ndarray) -> dict:
+        """Nodal friction at the iterate x with normal forces λ, this rank."""
+        trial, slip = self._trial(x)
+        bound = self._bound(lam)
+        force = return_mapping(trial, bound)
+        size = np.linalg.norm(trial, axis=1)
+        return {"lam": lam, "trial": trial, "bound": bound, "force": force, "slip": slip,
+                "slips": size > bound * (1 + 1e-12)}
+
+    # -- hooks of the step solver --------------------------------------------------------------
+    def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
+        """b ← b − f on the tangential rows (λ read off b first: −s F̃_ν where positive)."""
+        xs, values = x.getArray(readonly=True), b.getArray()
+        self._lam = np.maximum(-self.signs * values[self.slots], 0.0)
+        st = self.state(xs, self._lam)
+        values[self.tangential] -= np.where(self.free, st["force"], 0.0)
+
+    def jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
+        """A ← A − ∂f/∂x̃ on the tangential rows (A assembled without friction; λ of the last
+        residual, at the same iterate). Collective (assembles A)."""
+        xs = x.getArray(readonly=True)
+        st = self.state(xs, self._lam)
+        start = A.getOwnershipRange()[0]
+        k = self.stiffness * self.scale  # ∂(k slip)/∂x̃
+        rows_values = []
+        for i in range(len(self.slots)):
+            rows = self.tangential[i]
+            free = self.free[i]
+            if not free.any():
+                continue
+            size = np.linalg.norm(st["trial"][i])
+            if not st["slips"][i]:  # stick: f = trial, ∂f/∂x̃_τ = −k I
+                for r, ok in zip(rows, free):
+                    if ok:
+                        rows_values.append((start + r, start + r, k[i]))
+                continue
+            direction = st["trial"][i] / size
+            # slip: f = b t̂; ∂f/∂x̃_τ = −(b/|t|) k (I − t̂t̂ᵀ); ∂f/∂x̃ ∋ t̂ ∂b/∂x̃
+            d = len(rows)
+            block = st["bound"][i] / size * k[i] * (np.eye(d) - np.outer(direction, direction))
+            for a in range(d):
+                for c in range(d):
+                    if free[a] and block[a, c] != 0.0:
+                        rows_values.append((start + rows[a], start + rows[c], block[a, c]))
+            if self.friction.type == "coulomb" and st["lam"][i] > 0:
+                cols, values = A.getRow(start + int(self.slots[i]))
+                # −∂f/∂x̃ = −f̂ 𝔣 ∂λ/∂x̃ = f̂ 𝔣 s ∂F̃_ν/∂x̃
+                factor = self.friction.coefficient * self.signs[i]
+                for a in range(d):
+                    if free[a]:
+                        for col, value in zip(cols, values):
+                            rows_values.append((start + rows[a], int(col),
+                                                factor * direction[a] * value))
+        for row, col, value in rows_values:
+            A.setValue(int(row), int(col), value, addv=PETSc.InsertMode.ADD_VALUES)
+        A.assemble()
+
+    def commit(self, x: np.ndarray) -> None:
+        """The step is accepted at x (SNES units; λ of the last residual, evaluated there)."""
+        st = self.state(x, self._lam)
+        self.last = st
+        self.force_old = np.where(self.free, st["force"], 0.0)
+        self.x_old = x[self.tangential].copy()
+        self.shift[:] = 0.0
