@@ -315,3 +315,22 @@ def test_3d_block_dragged_diagonally_slides_against_the_drag():
     assert np.all(np.diff(np.log(errors[:, 1])) < -1.3), errors
     assert np.all(np.diff(np.log(errors[:, 0])) < -2.6), errors
     assert errors[-1, 0] < 1e-9 and errors[-1, 1] < 1e-5, errors
+
+
+def test_contact_csv_holds_a_signorini_part_s_friction(shared_tmp_path):
+    text = DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
+        "mu = 1e-3\n", 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n').replace(
+        "FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    scene = write_shared(shared_tmp_path / "sig.toml", text)
+    out = shared_tmp_path / "sig"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    lines = (out / "contact.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    col = {name: i for i, name in enumerate(header)}
+    last = rows[np.isclose(rows[:, 0], 1.0)]
+    inside = last[:, col["pressure"]] < -1e-9
+    assert inside.sum() >= 10 and np.all(last[inside, col["slipping"]] == 1)
+    # nodal: |t| = 0.3 λ_i / A_i, λ_i / A_i the lumped pressure
+    assert np.allclose(last[inside, col["tangential_traction"]],
+                       -0.3 * last[inside, col["pressure"]], rtol=1e-6)

@@ -495,6 +495,16 @@ class SignoriniPart:
 
     _time = 0.0  # of the last accepted step
 
+    @property
+    def last_friction(self) -> Optional[dict]:
+        """The accepted step's friction at the nodes: tangential traction (the nodal force over
+        the node's area), slip over the step, whether the node slipped; None without."""
+        if self.friction is None or self.friction.last is None:
+            return None
+        last, areas = self.friction.last, self.friction.areas
+        return {"traction": last["force"] / np.where(areas > 0, areas, 1.0)[:, None],
+                "slip": last["slip"], "slips": last["slips"]}
+
     def solver_terms(self) -> list:
         """Nodal terms of the step's residual and Jacobian (friction), for the step solver."""
         return [] if self.friction is None else [self.friction]
