@@ -118,3 +118,24 @@ def test_indentation_creep_demo(shared_tmp_path, monkeypatch):
     for name in ("indentation_creep.xdmf", "contact.csv", "reactions.csv", "summary.json",
                  "creep.png", "final_state.png"):
         assert (out / name).stat().st_size > 500, name
+
+
+def test_scratch_demo(shared_tmp_path, monkeypatch):
+    """The scratch test: while the tip slides the tangential force is 𝔣 × the normal one, the
+    plate keeps a groove behind the tip, and the contact nodes under the sliding tip slip."""
+    monkeypatch.setenv("CI", "1")
+    demo = _load("scratch")
+    out = shared_tmp_path / "scratch"
+    session = demo.run(out)
+    MPI.COMM_WORLD.barrier()
+    times = np.array(session.forces.times)
+    force = np.array(session.forces.contact)
+    sliding = times >= 0.4
+    assert np.allclose(force[sliding, 0] / -force[sliding, 1], 0.2, rtol=1e-8)
+    if MPI.COMM_WORLD.rank == 0:
+        rows = np.genfromtxt(out / "contact.csv", delimiter=",", names=True)
+        last = rows[np.isclose(rows["t"], times[-1])]
+        behind = (last["x"] > -0.35) & (last["x"] < 0.0)  # scratched, the tip gone
+        assert np.all(last["u_normal"][behind] < -0.01), last["u_normal"][behind]
+        assert last["slipping"][last["pressure"] < -1e-6].sum() >= 2
+    assert (out / "scratch.png").stat().st_size > 500

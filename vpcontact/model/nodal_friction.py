@@ -69,6 +69,7 @@ class NodalFriction:
         self.x_old = np.zeros(self.tangential.shape)      # x̃_τ at the last step (SNES units)
         self.shift = np.zeros(self.tangential.shape)      # the obstacle's tangential motion
         self._lam = np.zeros(len(self.slots))            # λ at the last residual
+        self._at: Optional[np.ndarray] = None             # ... and its iterate
         self.last: Optional[dict] = None                  # the accepted step's state
         blocks = cd.frames.blocks
         self._frame_tangents = np.array([blocks[i][:, o] for i, o in enumerate(others)])
@@ -101,15 +102,24 @@ class NodalFriction:
         force = return_mapping(trial, bound)
         size = np.linalg.norm(trial, axis=1)
         return {"lam": lam, "trial": trial, "bound": bound, "force": force, "slip": slip,
-                "slips": size > bound * (1 + 1e-12)}
+                "beyond": size > bound,  # the return mapping's branch
+                # (nodes in contact: λ above the round-off of an inactive node's residual)
+                "slips": (size > bound * (1 + 1e-12))
+                & (lam > 1e-8 * max(float(lam.max(initial=0.0)), np.finfo(float).tiny))}
 
     # -- hooks of the step solver --------------------------------------------------------------
     def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """b ← b − f on the tangential rows (λ read off b first: −s F̃_ν where positive)."""
         xs, values = x.getArray(readonly=True), b.getArray()
         self._lam = np.maximum(-self.signs * values[self.slots], 0.0)
+        self._at = xs.copy()  # the iterate λ belongs to
         st = self.state(xs, self._lam)
         values[self.tangential] -= np.where(self.free, st["force"], 0.0)
+
+    def current(self, x: PETSc.Vec) -> bool:
+        """Whether λ was read at x (on every rank: collective)."""
+        here = self._at is not None and np.array_equal(self._at, x.getArray(readonly=True))
+        return self.comm.allreduce(here, op=MPI.LAND)
 
     def jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """A ← A − ∂f/∂x̃ on the tangential rows (A assembled without friction; λ of the last
@@ -125,7 +135,7 @@ class NodalFriction:
             if not free.any():
                 continue
             size = np.linalg.norm(st["trial"][i])
-            if not st["slips"][i]:  # stick: f = trial, ∂f/∂x̃_τ = −k I
+            if not st["beyond"][i]:  # stick: f = trial, ∂f/∂x̃_τ = −k I
                 for r, ok in zip(rows, free):
                     if ok:
                         rows_values.append((start + r, start + r, k[i]))

@@ -242,7 +242,7 @@ class CompliancePart:
         pressure = -self.law.normal_stress(cd.normal_displacement(self.u) - cd.gap)
         bound = self.law.friction.bound_at(pressure, cd.points)
         traction = return_mapping(trial, bound)
-        slips = np.linalg.norm(trial, axis=1) > bound * (1 + 1e-12)
+        slips = (np.linalg.norm(trial, axis=1) > bound * (1 + 1e-12)) & (bound > 0)
         return {"traction": traction, "slip": slip, "slips": slips, "rows": rows}
 
     def update(self, time: float) -> None:

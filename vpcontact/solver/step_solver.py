@@ -453,6 +453,11 @@ class StepSolver:
         if self._P is not None:
             self._P.jacobian(A, A_snes)
             self._P.stabilize(A_snes, x, self._b, self._bounds)
+        if self._nodal and not all(term.current(x) for term in self._nodal):
+            # (the line search's last residual was elsewhere: λ must be read at x)
+            scratch = self._b.duplicate()
+            self._residual(snes, x, scratch)
+            scratch.destroy()
         for term in self._nodal:
             term.jacobian(x, A_snes)
         if self._block is not None:
