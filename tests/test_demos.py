@@ -139,3 +139,5 @@ def test_scratch_demo(shared_tmp_path, monkeypatch):
         assert np.all(last["u_normal"][behind] < -0.01), last["u_normal"][behind]
         assert last["slipping"][last["pressure"] < -1e-6].sum() >= 2
     assert (out / "scratch.png").stat().st_size > 500
+    xdmf = (out / "scratch.xdmf").read_text()
+    assert 'Name="tangential_traction"' in xdmf and 'Name="slipping"' in xdmf

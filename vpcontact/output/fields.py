@@ -187,7 +187,7 @@ class ContactHistory:
         pressure = self._gathered(lambda p: p.pressure())
         gap = self._gathered(lambda p: p.nodes.gap)
         if self.friction:
-            traction, slip, slipping = (self._gathered(lambda p, k=k: _friction(p, k))
+            traction, slip, slipping = (self._gathered(lambda p, k=k: friction_at_nodes(p, k))
                                         for k in ("traction", "slip", "slips"))
         if self.comm.rank == 0:
             self.gaps.append(gap)
@@ -262,7 +262,7 @@ class ContactHistory:
         on_rank0(self.comm, write)
 
 
-def _friction(part, key: str) -> np.ndarray:
+def friction_at_nodes(part, key: str) -> np.ndarray:
     """Per node of ``part``: |t| ("traction"), |Δu_τ| of the last accepted step ("slip") or
     whether it slipped ("slips"); zeros before the first step or without friction."""
     state = getattr(part, "last_friction", None)

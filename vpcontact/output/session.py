@@ -153,12 +153,23 @@ class Session:
 
     def _pressure_field(self, history):
         """Nodal contact pressure σ_ν as a P1 field (zero off the contact parts; P_k: its
-        vertex values)."""
-        problem = self.model.problem
+        vertex values) and, with friction, the tangential traction |σ_τ| and whether each node
+        slipped in the step (1) or not (0)."""
         if history is None:
             return ()
-        field = fem.Function(fem.FunctionSpace(problem.mesh, ("Lagrange", 1)),
-                             name="contact_pressure")
+        fields = [self._nodal_field(history, "contact_pressure", lambda part: part.pressure())]
+        if history.friction:
+            from vpcontact.output.fields import friction_at_nodes
+            fields += [self._nodal_field(history, name, lambda part, key=key:
+                                         friction_at_nodes(part, key))
+                       for name, key in (("tangential_traction", "traction"),
+                                         ("slipping", "slips"))]
+        return fields
+
+    def _nodal_field(self, history, name: str, values):
+        """(P1 field, refresh) of ``values(part)`` at every contact part's nodes."""
+        problem = self.model.problem
+        field = fem.Function(fem.FunctionSpace(problem.mesh, ("Lagrange", 1)), name=name)
         V = problem.V
         bs = V.dofmap.index_map_bs
         nodes = [part.nodes.dofs // bs for part in history.parts]  # vector dof -> node
@@ -172,13 +183,13 @@ class Session:
 
         def refresh():
             for part, at in zip(history.parts, nodes):
-                nodal.x.array[at] = part.pressure()
+                nodal.x.array[at] = values(part)
             nodal.x.scatter_forward()
             if nodal is not field:
                 field.interpolate(nodal)
                 field.x.scatter_forward()
 
-        return [(field, refresh)]
+        return field, refresh
 
     def _progress(self, step, report) -> None:
         if self.progress is not None:
