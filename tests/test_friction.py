@@ -334,3 +334,15 @@ def test_contact_csv_holds_a_signorini_part_s_friction(shared_tmp_path):
     # nodal: |t| = 0.3 λ_i / A_i, λ_i / A_i the lumped pressure
     assert np.allclose(last[inside, col["tangential_traction"]],
                        -0.3 * last[inside, col["pressure"]], rtol=1e-6)
+
+
+def test_friction_on_a_turning_obstacle_is_refused(shared_tmp_path, capsys):
+    text = DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
+        "mu = 1e-3\n", 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n'
+        'rotation = { center = [0, -1], angle = "0.01*t" }\n').replace(
+        "FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    scene = write_shared(shared_tmp_path / "turn.toml", text)
+    assert cli.main(["validate", str(scene)]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert re.search(r"turn\.toml:\d+: contact\.friction: .*turning obstacle", err), err

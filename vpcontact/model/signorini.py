@@ -91,6 +91,10 @@ class Signorini:
                     True if self.friction is not None else rotate)
         if self.friction is not None:
             from vpcontact.model.nodal_friction import NodalFriction
+            if self.rotation is not None or self.obstacle_moves:
+                raise InputError("friction on a turning or deforming obstacle is not available "
+                                 "yet (only translations are subtracted from the slip)",
+                                 key="contact.friction")
             part.friction = NodalFriction(part, shear_modulus)
         return part
 
