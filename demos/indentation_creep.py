@@ -41,7 +41,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 from pathlib import Path
 
 import numpy as np
@@ -60,10 +59,7 @@ def run(out: str | Path = "output/indentation_creep", cells: tuple[int, int] | N
     ci = bool(os.environ.get("CI"))
     cells = cells or ((32, 16) if ci else (64, 32))
     k = k or (0.05 if ci else 0.025)
-    path = scenes.bundled()["indentation_creep"]
-    text = re.sub(r"(?m)^cells = .*$", f"cells = [{cells[0]}, {cells[1]}]", path.read_text())
-    text = re.sub(r"(?m)^k = .*$", f"k = {k}", text)
-    session = Session(build(scenes.loads_text(text, path)), Path(out))
+    session = Session(build(scenes.load_bundled("indentation_creep", cells, k)), Path(out))
     session.run()
     _creep_figure(Path(out), session)
     return session

@@ -40,7 +40,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 from pathlib import Path
 
 import numpy as np
@@ -59,10 +58,7 @@ def run(out: str | Path = "output/indentation_relaxation", cells: tuple[int, int
     ci = bool(os.environ.get("CI"))
     cells = cells or ((48, 24) if ci else (128, 64))
     k = k or (0.05 if ci else 0.025)
-    text = scenes.bundled()["indentation_relaxation"].read_text()
-    text = re.sub(r"(?m)^cells = .*$", f"cells = [{cells[0]}, {cells[1]}]", text)
-    text = re.sub(r"(?m)^k = .*$", f"k = {k}", text)
-    scene = scenes.loads_text(text, scenes.bundled()["indentation_relaxation"])
+    scene = scenes.load_bundled("indentation_relaxation", cells, k)
     session = Session(build(scene), Path(out))
     session.run()
     _relaxation_figure(Path(out), session)

@@ -34,7 +34,6 @@ from __future__ import annotations
 
 import argparse
 import os
-import re
 from pathlib import Path
 
 import numpy as np
@@ -54,10 +53,7 @@ def run(out: str | Path = "output/scratch", cells: tuple[int, int] | None = None
     ci = bool(os.environ.get("CI"))
     cells = cells or ((40, 10) if ci else (80, 20))
     k = k or (0.05 if ci else 0.025)
-    path = scenes.bundled()["scratch"]
-    text = re.sub(r"(?m)^cells = .*$", f"cells = [{cells[0]}, {cells[1]}]", path.read_text())
-    text = re.sub(r"(?m)^k = .*$", f"k = {k}", text)
-    session = Session(build(scenes.loads_text(text, path)), Path(out))
+    session = Session(build(scenes.load_bundled("scratch", cells, k)), Path(out))
     session.run()
     _figure(Path(out), session)
     return session

@@ -455,6 +455,7 @@ class SignoriniPart:
     bounded = True
     driven = False
     friction = None  # its NodalFriction, with friction
+    _time = 0.0  # of the last accepted step
 
     def __init__(self, law: Signorini, u: fem.Function, facet_tags, equilibrium, name: str,
                  exclude: np.ndarray, rotate: Optional[bool]):
@@ -496,8 +497,6 @@ class SignoriniPart:
         if self.friction is not None and self.law.translation is not None:
             self.friction.move(np.asarray(self.law.translation(time), dtype=float).ravel()
                                - np.asarray(self.law.translation(self._time), dtype=float).ravel())
-
-    _time = 0.0  # of the last accepted step
 
     @property
     def last_friction(self) -> Optional[dict]:

@@ -19,9 +19,10 @@ from vpcontact.scene.expressions import Expression, ExpressionError, parse
 from vpcontact.scene.files import (DEFAULT_SCENE, MAX_BYTES, BoundaryPart, BoxSelector, ContactSpec,
                                   InitialSpec, LawSpec, LoadSpec, MaterialSpec, MeshSpec,
                                   OutputSpec, PlaneSelector, PointLoad, Problem, Scene, SceneError,
-                                  SolverSpec, TimeSpec, bundled, load, loads_text, resolve)
+                                  SolverSpec, TimeSpec, bundled, load, load_bundled,
+                                  loads_text, resolve)
 
 __all__ = ["DEFAULT_SCENE", "MAX_BYTES", "BoundaryPart", "BoxSelector", "ContactSpec", "Expression",
            "ExpressionError", "InitialSpec", "LawSpec", "LoadSpec", "MaterialSpec", "MeshSpec",
            "Model", "OutputSpec", "PlaneSelector", "PointLoad", "Problem", "Scene", "SceneError",
-           "SolverSpec", "TimeSpec", "build", "bundled", "load", "loads_text", "parse", "resolve"]
+           "SolverSpec", "TimeSpec", "build", "bundled", "load", "load_bundled", "loads_text", "parse", "resolve"]

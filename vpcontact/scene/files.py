@@ -37,6 +37,7 @@ import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Sequence
 
 from vpcontact.scene import write
 from vpcontact.scene.locate import Locator
@@ -227,6 +228,19 @@ def _default_name(path: Path) -> str:
 def bundled() -> dict[str, Path]:
     """The scenes shipped with vpcontact, by name (``vpcontact/scene/bundled/<name>.toml``)."""
     return {p.stem: p for p in sorted(SCENES_DIR.glob("*.toml"))}
+
+
+def load_bundled(name: str, cells: Sequence[int] | None = None,
+                 k: float | None = None) -> Scene:
+    """A bundled scene with its built-in mesh's ``cells`` and its step ``k`` replaced (the demos
+    run coarser versions of theirs)."""
+    path = bundled()[name]
+    text = path.read_text()
+    if cells is not None:
+        text = re.sub(r"(?m)^cells = .*$", f"cells = [{', '.join(str(c) for c in cells)}]", text)
+    if k is not None:
+        text = re.sub(r"(?m)^k = .*$", f"k = {k}", text)
+    return loads_text(text, path)
 
 
 def resolve(name_or_path: str | os.PathLike) -> Path:

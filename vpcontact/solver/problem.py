@@ -213,7 +213,7 @@ class QuasistaticProblem:
             terms.append(self.held.terms(v, du))
             self._free_motions = free
             self._facet_tags = facet_tags
-            self._load_terms = external
+            self._load_form = fem.form(sum(external[1:], external[0])) if external else None
         for r, j in terms:
             residual += r
             jacobian += j
@@ -386,18 +386,21 @@ class QuasistaticProblem:
             return
         reactions, forces = self.support_forces(per_part=True)
         applied = float(np.abs(forces).sum() + np.abs(reactions).sum())
-        if self._point_loads or self._load_terms:
-            loads = fem.Function(self.V)
-            if self._load_terms:
-                fem.petsc.assemble_vector(loads.vector, fem.form(
-                    sum(self._load_terms[1:], self._load_terms[0])))
-            if self._point_loads:
-                dofs, values = self._point_forces()
-                loads.x.array[dofs] += values
-            owned = self.V.dofmap.index_map.size_local * self.V.dofmap.index_map_bs
-            applied += self.mesh.comm.allreduce(float(np.abs(loads.x.array[:owned]).sum()),
-                                                op=MPI.SUM)
+        applied += self.mesh.comm.allreduce(float(np.abs(self._nodal_loads()).sum()),
+                                            op=MPI.SUM)
         self.held.check_step(applied, t)
+
+    def _nodal_loads(self) -> np.ndarray:
+        """This rank's owned entries of the nodal load vector at the current time (tractions,
+        body force, point loads)."""
+        loads = fem.Function(self.V)
+        if self._load_form is not None:
+            fem.petsc.assemble_vector(loads.vector, self._load_form)
+            loads.vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        if self._point_loads:
+            dofs, values = self._point_forces()
+            loads.x.array[dofs] += values
+        return loads.x.array[:self.V.dofmap.index_map.size_local * self.V.dofmap.index_map_bs]
 
     def check_held(self, times) -> None:
         """A body held by its contacts: refuse (InputError at ``boundary``) a free rigid motion
@@ -418,17 +421,8 @@ class QuasistaticProblem:
         """(generalised force L · m of the applied loads on the rigid motion m (its
         ``coefficients``) at t, and its scale Σ |L_i m_i|), L the nodal load vector (tractions,
         body force, point loads)."""
-        loads = fem.Function(self.V)
-        if self._load_terms:
-            fem.petsc.assemble_vector(loads.vector, fem.form(sum(self._load_terms[1:],
-                                                                 self._load_terms[0])))
-            loads.vector.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        if self._point_loads:
-            dofs, values = self._point_forces()
-            loads.x.array[dofs] += values
-        mode = rigid_mode_values(self.V, coefficients)
-        owned = self.V.dofmap.index_map.size_local * self.V.dofmap.index_map_bs
-        products = loads.x.array[:owned] * mode[:owned]
+        loads = self._nodal_loads()
+        products = loads * rigid_mode_values(self.V, coefficients)[:len(loads)]
         comm = self.mesh.comm
         return (comm.allreduce(float(products.sum()), op=MPI.SUM),
                 comm.allreduce(float(np.abs(products).sum()), op=MPI.SUM))
