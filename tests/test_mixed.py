@@ -11,7 +11,9 @@
 * The default formulation: mixed where displacements lock (3-D or plane-strain Perzyna, or
   ν ≥ 0.45) unless P1 is asked for, displacement otherwise.
 * The paper's 3-D test with the mixed formulation: the iterative block-preconditioned solver
-  inside SNES VI gives the direct solver's answer (serially and on 2 ranks).
+  inside SNES VI gives the direct solver's answer (serially and on 2 ranks); so does it without
+  SNES VI (normal compliance), with its p-multigrid on the displacement block.
+* The p-multigrid's interpolation P1 → P2 is exact on P1 fields, in local frames too.
 """
 
 import numpy as np
@@ -211,8 +213,8 @@ def _paper_3d(linear: str, T: float, n: int = 2):
 
 
 def test_block_preconditioner_inside_the_vi_matches_the_direct_solver():
-    """The iterative solver of the mixed formulation (FGMRES/GMRES with PCFIELDSPLIT: GAMG on
-    u, the weighted pressure mass matrix for the Schur complement), inside SNES VI's lagged
+    """The iterative solver of the mixed formulation (FGMRES/GMRES with PCFIELDSPLIT: p-multigrid
+    on u, the weighted pressure mass matrix for the Schur complement), inside SNES VI's lagged
     solver, gives the direct solver's answer on the paper's 3-D test into its plastic flow
     (t = 0.1: the beam flows from t ≈ 0.01 and is in contact), in a bounded number of Krylov
     iterations per solve (measured: 37 per solve serially and on 2 ranks on 1 038 unknowns)."""
@@ -229,6 +231,80 @@ def test_block_preconditioner_inside_the_vi_matches_the_direct_solver():
     solves = iterative.solver.total_iterations
     per_solve = counters["krylov_iterations"] / max(solves, 1)
     assert 5 <= per_solve <= 80, (per_solve, counters)
+
+
+def _normal_compliance_3d(linear: str, T: float = 0.05, n: int = 2):
+    """The bundled normal_compliance_3d (mixed by default) on 3n×n×n cells, to T, k = 0.01."""
+    import dataclasses
+
+    from vpcontact import scene as scenes
+    from vpcontact.solver import StepControl, advance
+
+    scene = scenes.load(scenes.bundled()["normal_compliance_3d"])
+    scene = dataclasses.replace(
+        scene, mesh=dataclasses.replace(scene.mesh, cells=(3 * n, n, n)),
+        time=dataclasses.replace(scene.time, T=T, k=0.01),
+        solver=dataclasses.replace(scene.solver, linear=linear))
+    problem = scenes.build(scene).problem
+    forces = [problem.support_forces()[1][2] for _ in advance(problem, T, StepControl(0.01))]
+    return problem, np.array(forces)
+
+
+def test_block_preconditioner_without_the_vi_matches_the_direct_solver():
+    """Without SNES VI (normal compliance) the step's KSP is PETSc's own: its field split must
+    still get the block solvers of vpcontact.solver.linear (they read their options when SNES
+    first sets them up, inside the solve) — the p-multigrid on u and Chebyshev on the weighted
+    mass matrix — and give the direct solver's answer."""
+    direct, f_direct = _normal_compliance_3d("direct")
+    iterative, f_iterative = _normal_compliance_3d("iterative")
+    assert iterative.solver.linear == "iterative"
+    pc = iterative.solver.snes.getKSP().getPC()
+    assert pc.getType() == "fieldsplit"
+    assert [k.getPC().getType() for k in pc.getFieldSplitSubKSP()] == ["python", "ksp"]
+    assert f_direct[-1] > 0.1
+    assert np.allclose(f_iterative, f_direct, rtol=1e-8, atol=0.0), (f_iterative, f_direct)
+    du = COMM.allreduce(float(np.abs(iterative.u.x.array - direct.u.x.array).max()), op=MPI.MAX)
+    umax = COMM.allreduce(float(np.abs(direct.u.x.array).max()), op=MPI.MAX)
+    assert du <= 1e-8 * umax, (du, umax)
+
+
+@pytest.mark.parametrize("rotated", [False, True])
+def test_p_multigrid_interpolation_is_exact_on_p1_fields(rotated):
+    """P = Rᵀ I₁² maps the P1 interpolant of an affine field to the P2 one (in the frames R:
+    a rotation about z at every node, different per node)."""
+    import ufl
+    from dolfinx import fem
+    from petsc4py import PETSc
+
+    from vpcontact.solver.p_multigrid import CoarseSpace
+
+    msh = dmesh.create_box(COMM, [np.zeros(3), np.array([2.0, 1.0, 1.0])], [4, 2, 2])
+    V = fem.FunctionSpace(msh, ufl.VectorElement("Lagrange", msh.ufl_cell(), 2))
+    field = lambda x: np.stack([1 + 2 * x[0] - x[1], 3 * x[2] - x[0], 0.5 + x[1] + x[2]])
+    R = None
+    owned = V.dofmap.index_map.size_local
+    angles = V.tabulate_dof_coordinates()[:owned, 0]  # a different frame at every node
+    if rotated:
+        start = V.dofmap.index_map.local_range[0] * 3
+        R = PETSc.Mat().createAIJ(((3 * owned, None), (3 * owned, None)), nnz=3, comm=COMM)
+        for i, a in enumerate(angles):
+            Q = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0, 0, 1]])
+            rows = start + 3 * i + np.arange(3, dtype=np.int32)
+            R.setValues(rows, rows, Q.ravel())
+        R.assemble()
+    space = CoarseSpace(V, R)
+    u1 = fem.Function(space.V1)
+    u1.interpolate(field)
+    u2 = fem.Function(V)
+    u2.interpolate(field)
+    expected = u2.vector.copy()
+    if rotated:
+        R.multTranspose(u2.vector, expected)
+    result = space.interpolation.createVecLeft()
+    space.interpolation.mult(u1.vector, result)
+    result.axpy(-1.0, expected)
+    assert result.norm(PETSc.NormType.INFINITY) <= 1e-12 * expected.norm(PETSc.NormType.INFINITY)
+    space.destroy()
 
 
 def test_auto_linear_solver_by_size_and_formulation():

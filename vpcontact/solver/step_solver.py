@@ -24,7 +24,8 @@ from vpcontact.errors import ConvergenceError, InputError
 from vpcontact.solver import linear as linear_solvers
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
                                           rejected_option)
-from vpcontact.solver.vi_linear import LaggedDirectSolve, LaggedMultigrid, rigid_body_modes
+from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
+                                        rigid_body_modes)
 
 _counter = itertools.count()
 class StepSolver:
@@ -126,7 +127,9 @@ class StepSolver:
             defaults["vpcontact_vi_linear"] = "lagged_gamg"
             self._modes = rigid_body_modes(u.function_space, variables, layout=fields)
             if mixed:
-                self._block = linear_solvers.BlockPreconditioner(fields, self._modes, self.scale)
+                rotation = None if variables is None else variables.matrix
+                self._block = linear_solvers.BlockPreconditioner(
+                    fields, self._modes, self.scale, prefix=self.prefix, rotation=rotation)
             else:
                 self._A.setNearNullSpace(self._modes)
         self._options = {**defaults, **(petsc_options or {})}
@@ -296,6 +299,7 @@ class StepSolver:
             if self._block is not None:  # a saddle point: GMRES, and the fields on M
                 self.lagged_lu.allow_cg = False
                 self.lagged_lu.configure = self._block.configure
+                self._block.solver = self.lagged_lu  # its rebuilds: the block's policy
         ksp = self.snes.getKSP()
         ksp.setType("python")
         ksp.setPythonContext(self.lagged_lu)
@@ -546,7 +550,14 @@ class StepSolver:
         """One SNES solve from self._x: (converged reason, iterations)."""
         start = _time.perf_counter()
         ksp_start = self._ksp_event.getPerfInfo()["time"]
-        snes.solve(None, self._x)
+        # The options are in PETSc's database only while SNES runs (it holds 512 entries per
+        # process): inner solvers read theirs when they are first set up, in the solve (the
+        # field split's blocks, multigrid levels, MUMPS). Not under the lagged VI solver (a
+        # python KSP that keeps its own options): SNES VI sets its KSP from the options at
+        # every iteration, which would replace it.
+        lagged = snes.getKSP().getType() == "python"
+        with options_in_database(snes.getOptionsPrefix(), {} if lagged else self._options):
+            snes.solve(None, self._x)
         self.timings["snes"] += _time.perf_counter() - start
         self.timings["linear_solve"] += self._ksp_event.getPerfInfo()["time"] - ksp_start
         its = snes.getIterationNumber()

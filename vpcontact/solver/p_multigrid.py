@@ -1,0 +1,228 @@
+# SPDX-License-Identifier: MIT
+"""A two-level p-multigrid cycle for the P2 displacement block of the mixed formulation.
+
+Algebraic multigrid coarsens a P2 vector Laplacian-like matrix poorly: its graph is dense (a P2
+tetrahedron couples 30 unknowns) and the aggregates GAMG builds from it neither follow the
+element's two kinds of nodes nor keep the rigid-body modes well, so one GAMG V-cycle on the
+displacement block of the Taylor–Hood Jacobian loses accuracy as the mesh is refined. On the
+same mesh, P1 is a natural coarse space with an exact embedding: the interpolation I₁² (P1 →
+P2, vertex values kept, edge midpoints the mean of their vertices) is a sparse matrix with one
+or two entries per row. One cycle of this preconditioner is
+
+    y  = S(b)                              Chebyshev–Jacobi smoothing on A (P2), from zero
+    y += P GAMG(Pᵀ(b − A y))               coarse correction: A_c = Pᵀ A P (Galerkin, P1)
+    y += S(b − A y)                        the same smoothing again (a symmetric cycle)
+
+with P = Rᵀ I₁² (R the contact frames, when the unknowns are rotated) whose rows at identity
+rows of A (Dirichlet conditions; the active bounds of SNES VI's full-size matrix) are zero, so
+the coarse correction leaves them alone. The coarse problem is P1 elasticity-like, which GAMG
+(with the rigid-body modes of the P1 vertices) handles as well as it does the displacement
+formulation. Measured on single solves of the flowing beam's tangent (the paper's 3-D test,
+G_eff = 10³ on x < 2, ``bench/p_multigrid.py``): FGMRES iterations to 1e−8 at 1 038 / 6 400 /
+19 690 unknowns 49 / 59 / 69 → 52 / 55 / 56 with vpcontact's formulation and 33 / 40 / 47 →
+30 / 31 / 33 with Herrmann's, in half the time.
+
+PETSc creates the context (``pc_type python``, ``pc_python_type`` this module's
+:class:`PMultigrid`) for the displacement split; it finds its spaces through :func:`register`,
+keyed by the step solver's options prefix (the sub-PC's prefix starts with it).
+"""
+
+from __future__ import annotations
+
+import weakref
+from typing import Optional
+
+import numpy as np
+import ufl
+from dolfinx import fem
+from dolfinx.cpp.fem.petsc import interpolation_matrix
+from petsc4py import PETSc
+
+from vpcontact.errors import SolverOptionError
+
+#: Options of the smoothing on the P2 level: two Chebyshev–Jacobi sweeps (before and after the
+#: coarse correction), the spectrum bound estimated for every new matrix.
+SMOOTHER_OPTIONS = {
+    "ksp_type": "chebyshev",
+    "ksp_max_it": 2,
+    "ksp_norm_type": "none",
+    "ksp_chebyshev_esteig": "0,0.1,0,1.1",
+    "pc_type": "jacobi",
+}
+
+#: Options of the coarse level's GAMG (one V-cycle; as for the displacement formulation).
+COARSE_OPTIONS = {
+    "ksp_type": "preonly",
+    "pc_type": "gamg",
+    "pc_gamg_threshold": 0.02,
+    "pc_gamg_square_graph": 1,
+    "pc_gamg_coarse_eq_limit": 1000,
+    "pc_gamg_reuse_interpolation": "false",
+    "mg_levels_ksp_type": "chebyshev",
+    "mg_levels_pc_type": "jacobi",
+    "mg_levels_ksp_max_it": 2,
+}
+
+_SPACES: "weakref.WeakValueDictionary[str, CoarseSpace]" = weakref.WeakValueDictionary()
+
+
+class CoarseSpace:
+    """The P1 coarse space of a P2 displacement block: the interpolation P (rows laid out like
+    the displacement unknowns of SNES, in its frames) and the coarse rigid-body modes.
+
+    Args:
+        V: the P2 vector space of the displacement.
+        rotation: the u-block of R (ũ = Rᵀu in local frames), or None.
+    """
+
+    def __init__(self, V: fem.FunctionSpace, rotation: Optional[PETSc.Mat] = None):
+        mesh = V.mesh
+        element = V.ufl_element()
+        family = "Q" if mesh.ufl_cell().cellname() in ("quadrilateral", "hexahedron") else "Lagrange"
+        self.V1 = fem.FunctionSpace(mesh, ufl.VectorElement(family, mesh.ufl_cell(), 1,
+                                                            dim=element.value_shape()[0]))
+        P = interpolation_matrix(self.V1._cpp_object, V._cpp_object)
+        P.assemble()
+        if rotation is not None:
+            rotated = rotation.transposeMatMult(P)
+            P.destroy()
+            P = rotated
+        self.interpolation = P
+        self.block_size = self.V1.dofmap.index_map_bs
+        self.modes = _rigid_body_modes(self.V1)
+
+    def destroy(self) -> None:
+        self.interpolation.destroy()
+        self.modes.destroy()
+
+
+def _rigid_body_modes(V1: fem.FunctionSpace) -> PETSc.NullSpace:
+    """Orthonormal translations and rotations on the P1 vertices (Cartesian components)."""
+    bs = V1.dofmap.index_map_bs
+    owned = V1.dofmap.index_map.size_local
+    x = V1.tabulate_dof_coordinates()[:owned]
+    zero = np.zeros(owned)
+    fields = [np.eye(bs)[i] * np.ones((owned, 1)) for i in range(bs)]
+    if bs == 2:
+        fields.append(np.column_stack([-x[:, 1], x[:, 0]]))
+    else:
+        fields += [np.column_stack([-x[:, 1], x[:, 0], zero]),
+                   np.column_stack([zero, -x[:, 2], x[:, 1]]),
+                   np.column_stack([x[:, 2], zero, -x[:, 0]])]
+    vectors = []
+    for field in fields:
+        vec = PETSc.Vec().createMPI((owned * bs, None), bsize=bs, comm=V1.mesh.comm)
+        vec.array[:] = field.ravel()
+        for prev in vectors:
+            vec.axpy(-vec.dot(prev), prev)
+        vec.normalize()
+        vectors.append(vec)
+    return PETSc.NullSpace().create(vectors=vectors, comm=V1.mesh.comm)
+
+
+def register(prefix: str, space: CoarseSpace) -> None:
+    """Make ``space`` the coarse space of every :class:`PMultigrid` under options ``prefix``
+    (kept while the caller holds ``space``)."""
+    _SPACES[prefix] = space
+
+
+def _lookup(prefix: str) -> CoarseSpace:
+    matches = [key for key in _SPACES.keys() if prefix.startswith(key)]
+    if not matches:
+        raise SolverOptionError(f"no P1 coarse space registered for the options prefix {prefix!r} "
+                          "(pc_type python with vpcontact's p-multigrid needs the mixed "
+                          "formulation's step solver)")
+    return _SPACES[max(matches, key=len)]
+
+
+def identity_rows(A: PETSc.Mat) -> np.ndarray:
+    """Global indices of the owned rows of A with one nonzero value (their diagonal): the
+    Dirichlet rows and the active bounds' rows of SNES VI's full-size matrix."""
+    indptr, _, values = A.getValuesCSR()
+    nonzero = np.concatenate([[0], np.cumsum(values != 0.0)])
+    counts = nonzero[indptr[1:]] - nonzero[indptr[:-1]]
+    start = A.getOwnershipRange()[0]
+    return (start + np.flatnonzero(counts <= 1)).astype(PETSc.IntType)
+
+
+def _set_up(ksp: PETSc.KSP, defaults: dict) -> None:
+    """Set ``ksp`` up with ``defaults`` under its prefix (options already in PETSc's database,
+    the user's, take precedence; GAMG reads its levels' options while it sets up)."""
+    opts = PETSc.Options()
+    prefix = ksp.getOptionsPrefix()
+    added = [key for key in defaults if not opts.hasName(prefix + key)]
+    for key in added:
+        opts[prefix + key] = defaults[key]
+    try:
+        ksp.setFromOptions()
+        ksp.setUp()
+    finally:
+        for key in added:
+            opts.delValue(prefix + key)
+
+
+class PMultigrid:
+    """The PETSc python PC context of the cycle in the module docstring."""
+
+    def __init__(self):
+        self.space: Optional[CoarseSpace] = None
+        self.P: Optional[PETSc.Mat] = None
+        self.coarse_matrix: Optional[PETSc.Mat] = None
+        self.smoother = self.coarse = None
+        self._r = self._rc = self._ec = self._dy = None
+
+    def _create(self, pc: PETSc.PC) -> None:
+        prefix = pc.getOptionsPrefix() or ""
+        self.space = _lookup(prefix)
+        comm = pc.getComm()
+        self.smoother = PETSc.KSP().create(comm)
+        self.smoother.setOptionsPrefix(prefix + "pmg_smooth_")
+        self.coarse = PETSc.KSP().create(comm)
+        self.coarse.setOptionsPrefix(prefix + "pmg_coarse_")
+
+    def setUp(self, pc: PETSc.PC) -> None:
+        if self.space is None:
+            self._create(pc)
+        A, B = pc.getOperators()
+        P = self.space.interpolation.copy()
+        rows = identity_rows(B)
+        P.zeroRows(rows, diag=0.0)  # the coarse correction leaves fixed unknowns alone
+        if self.P is not None:
+            self.P.destroy()
+        self.P = P
+        coarse = B.ptap(P)
+        coarse.setBlockSize(self.space.block_size)
+        coarse.setNearNullSpace(self.space.modes)
+        if self.coarse_matrix is not None:
+            self.coarse_matrix.destroy()
+        self.coarse_matrix = coarse
+        self.smoother.setOperators(A, B)
+        _set_up(self.smoother, SMOOTHER_OPTIONS)
+        self.coarse.setOperators(coarse)
+        _set_up(self.coarse, COARSE_OPTIONS)
+        for vec in (self._r, self._rc, self._ec, self._dy):
+            if vec is not None:
+                vec.destroy()
+        self._rc, self._r = P.createVecs()
+        self._ec = self._rc.duplicate()
+        self._dy = self._r.duplicate()
+
+    def apply(self, pc: PETSc.PC, b: PETSc.Vec, y: PETSc.Vec) -> None:
+        A = pc.getOperators()[0]
+        r, rc, ec, dy = self._r, self._rc, self._ec, self._dy
+        self.smoother.solve(b, y)
+        A.mult(y, r)
+        r.aypx(-1.0, b)
+        self.P.multTranspose(r, rc)
+        self.coarse.solve(rc, ec)
+        self.P.multAdd(ec, y, y)
+        A.mult(y, r)
+        r.aypx(-1.0, b)
+        self.smoother.solve(r, dy)
+        y.axpy(1.0, dy)
+
+    def destroy(self, pc: PETSc.PC) -> None:
+        for obj in (self.P, self.coarse_matrix, self.smoother, self.coarse,
+                    self._r, self._rc, self._ec, self._dy):
+            if obj is not None:
+                obj.destroy()
