@@ -95,7 +95,7 @@ class Signorini:
                 raise InputError("friction on a turning or deforming obstacle is not available "
                                  "yet (only translations are subtracted from the slip)",
                                  key="contact.friction")
-            part.friction = NodalFriction(part, shear_modulus)
+            part.friction = NodalFriction(part, shear_modulus, facet_tags)
         return part
 
     def obstacle_at(self, time: float) -> LevelSet:

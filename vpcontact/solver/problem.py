@@ -249,7 +249,7 @@ class QuasistaticProblem:
         if bounds is not None:
             self.solver.set_bounds(*bounds)
         for term in nodal_terms:
-            term.bind(scale, self.dirichlet.prescribed)
+            term.bind(scale, self.dirichlet.prescribed, self.fields)
         self._correction_expr = None  # compiled on first use (outputs of the mixed formulation)
         self._contact_active = False  # after the last accepted step
         self.step_index = 0
