@@ -22,7 +22,7 @@ from vpcontact import cli
 from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain, Signorini
 import ufl
 
-from vpcontact.model.friction import Friction
+from vpcontact.model.friction import STICK_STIFFNESS, Friction
 from vpcontact.solver import (Dirichlet, Loads, QuasistaticProblem, StepControl, advance,
                               tag_facets)
 
@@ -299,6 +299,11 @@ def test_signorini_sticks_below_the_limit_with_the_mixed_formulation():
         if abs(step.time - 0.5) < 1e-9:
             at_press = problem.u.x.array[x_dofs].copy()
     friction, comm = problem.contacts[0].friction, MPI.COMM_WORLD
+    # k_i = STICK_STIFFNESS G/L A_i with L = 1 the block's length on any number of ranks (it
+    # was once each rank's own extent, and the stick answers changed with the ranks)
+    shear = 1e3 / (2 * 1.3)
+    assert np.allclose(friction.stiffness, STICK_STIFFNESS * shear / 1.0 * friction.areas,
+                       rtol=1e-14)
     assert not comm.allreduce(bool(friction.last["slips"].any()), op=MPI.LOR)
     moved = comm.allreduce(float(np.max(np.abs(problem.u.x.array[x_dofs] - at_press),
                                         initial=0.0)), op=MPI.MAX)

@@ -41,6 +41,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from vpcontact.model.extent import mesh_extent
 from vpcontact.model.friction import STICK_STIFFNESS, return_mapping
 from vpcontact.model.nodal_areas import lumped_areas
 
@@ -67,7 +68,7 @@ class NodalFriction:
         self.friction = part.law.friction
         mesh = V.mesh
         self.bs = bs = V.dofmap.index_map_bs
-        extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
+        extent = mesh_extent(mesh)
         self.comm = mesh.comm
         self.areas = lumped_areas(V, facet_tags, part.law.tag, cd.nodes)
         self.stiffness = STICK_STIFFNESS * shear_modulus / extent * self.areas
