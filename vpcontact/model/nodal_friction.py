@@ -4,7 +4,12 @@
 Frictionless Signorini is a bound on one unknown per contact node, ũ_ν ≤ g (in the node's
 frame, :mod:`vpcontact.model.frames`). Its normal force λ_i ≥ 0 is the variational
 inequality's multiplier: at the solution it is what the residual of that unknown asks of the
-obstacle, λ_i = −s_i F̃_ν,i (s_i the frame's sign), and 0 where the node is free. Friction acts on
+obstacle, λ_i = −s_i F̃_ν,i (s_i the frame's sign), and 0 where the node is free. At every
+iterate λ_i is read so only where the node is on its bound (within SNES VI's tolerance), and is 0
+elsewhere: off the bound −s_i F̃_ν,i is an iterate's imbalance, not a contact force, and a
+threshold from it gave nodes not yet in contact friction (a rigid cylinder pressed into a
+block, whose contact grows: Newton stalled for 50 iterations in steps cut 16-fold; now 3–5
+per step). At a solution the two agree (F̃_ν = 0 off the bound). Friction acts on
 the node's other (tangential) unknowns as a nodal force with the same return mapping as on a
 deformable foundation (:mod:`vpcontact.model.friction`):
 
@@ -44,6 +49,11 @@ from petsc4py import PETSc
 from vpcontact.model.extent import mesh_extent
 from vpcontact.model.friction import STICK_STIFFNESS, return_mapping
 from vpcontact.model.nodal_areas import lumped_areas
+
+
+#: A node is on its bound (in contact) within this distance of it in SNES's units (SNES VI's
+#: own tolerance for an active bound).
+ON_BOUND = 1e-8
 
 
 class NodalFriction:
@@ -132,9 +142,11 @@ class NodalFriction:
 
     # -- hooks of the step solver --------------------------------------------------------------
     def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """b ← b − f on the tangential rows (λ read off b first: −s F̃_ν where positive)."""
+        """b ← b − f on the tangential rows (λ read off b first: −s F̃_ν where positive, at
+        nodes on their bound; 0 off it — see the module docstring)."""
         xs, values = x.getArray(readonly=True), b.getArray()
-        self._lam = np.maximum(-self.signs * values[self.slots], 0.0)
+        on = self.signs * xs[self.slots] >= self.part.bound_gaps() / self.scale - ON_BOUND
+        self._lam = np.where(on, np.maximum(-self.signs * values[self.slots], 0.0), 0.0)
         self._at = xs.copy()  # the iterate λ belongs to
         st = self.state(xs, self._lam)
         values[self.tangential] -= np.where(self.free, st["force"], 0.0)
