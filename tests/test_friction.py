@@ -22,7 +22,7 @@ from vpcontact import cli
 from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain, Signorini
 import ufl
 
-from vpcontact.model.friction import Friction
+from vpcontact.model.friction import STICK_STIFFNESS, Friction
 from vpcontact.solver import (Dirichlet, Loads, QuasistaticProblem, StepControl, advance,
                               tag_facets)
 
@@ -193,9 +193,10 @@ def test_friction_on_a_force_driven_obstacle_is_refused(shared_tmp_path, capsys)
         assert re.search(r"sig\.toml:\d+: contact\.friction: .*driven by a force", err), err
 
 
-def _signorini_block(friction, floor_motion=None, drag=0.02):
+def _signorini_block(friction, floor_motion=None, drag=0.02, **discretization):
     """The dragged block on a rigid floor (Signorini) with friction; or held by its top while
-    the floor slides under it (``floor_motion``)."""
+    the floor slides under it (``floor_motion``). ``discretization``: ``degree`` and
+    ``formulation`` of the problem (default: P1 displacements)."""
     comm = MPI.COMM_WORLD
     msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [16, 4])
     tags = tag_facets(msh, {1: lambda x: np.isclose(x[1], 0.25), 2: lambda x: np.isclose(x[1], 0.0)})
@@ -209,7 +210,8 @@ def _signorini_block(friction, floor_motion=None, drag=0.02):
     floor = Signorini(2, obstacle=lambda x: x[1], max_distance=1.0, friction=friction,
                       translation=floor_motion)
     return QuasistaticProblem(msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
-                              dirichlet=[Dirichlet(1, (ux, uy), "top")], contact=floor)
+                              dirichlet=[Dirichlet(1, (ux, uy), "top")], contact=floor,
+                              **discretization)
 
 
 @pytest.mark.parametrize("kind", ["coulomb", "tresca"])
@@ -229,6 +231,51 @@ def test_signorini_full_slip(kind):
     assert problem.contact_monitor.report().active > 10
 
 
+def _on_displacement_unknowns_only(problem) -> bool:
+    """Whether every unknown the nodal friction touches (its tangential rows and the normal
+    rows it reads λ from) is a displacement unknown of SNES's vector (on every rank)."""
+    friction = problem.contacts[0].friction
+    probe = problem.fields.create_vector()
+    start = probe.getOwnershipRange()[0]
+    probe.destroy()
+    indices = problem.fields.field_indices()
+    u_rows = indices["displacement"].getIndices() - start
+    used = np.concatenate([friction.tangential.ravel(), friction.slots])
+    inside = bool(np.isin(used, u_rows).all())
+    if "pressure" in indices:
+        inside &= not np.isin(used, indices["pressure"].getIndices() - start).any()
+    return MPI.COMM_WORLD.allreduce(inside, op=MPI.LAND)
+
+
+@pytest.mark.parametrize("discretization, max_its", [({"degree": 2}, 6),
+                                                     ({"formulation": "mixed"}, 8)],
+                         ids=["P2", "mixed"])
+def test_signorini_full_slip_beyond_p1(discretization, max_its):
+    """Coulomb on a rigid floor with P2 displacements, and with the mixed (Taylor–Hood u, p)
+    formulation: while the block slides the tangential force is 0.3 × the normal one to 1e-8
+    (measured 1e-15 with both); the HRZ areas of the bottom's nodes add up to its length;
+    friction touches displacement unknowns only; Newton iterations per step ≤ 6 (P2) and ≤ 8
+    (mixed: measured 4, 0, 0, 0, 0, 8, 1, 1, 0, 0)."""
+    problem = _signorini_block(Friction("coulomb", coefficient=0.3), **discretization)
+    assert problem.formulation == discretization.get("formulation", "displacement")
+    assert problem.V.ufl_element().degree() == 2
+    sliding = 0
+    for step in advance(problem, 1.0, StepControl(0.1)):
+        assert step.newton_iterations <= max_its, step
+        if step.time >= 0.7 - 1e-9:
+            _, force = problem.support_forces()
+            assert -force[0] == pytest.approx(0.3 * force[1], rel=1e-8), force
+            sliding += 1
+    assert sliding == 4
+    friction = problem.contacts[0].friction
+    comm = MPI.COMM_WORLD
+    assert comm.allreduce(float(friction.areas.sum())) == pytest.approx(1.0, rel=1e-12)
+    assert comm.allreduce(float(friction.areas.min(initial=np.inf)), op=MPI.MIN) > 0
+    assert _on_displacement_unknowns_only(problem)
+    assert problem.contact_monitor.report().active > 20  # 2 × 16 + 1 nodes on the bottom
+    assert comm.allreduce(bool(friction.last["slips"].any()), op=MPI.LOR)
+
+
 def test_signorini_sticks_below_the_limit():
     problem = _signorini_block(Friction("coulomb", coefficient=10.0), drag=2e-4)
     for _ in advance(problem, 1.0, StepControl(0.1)):
@@ -236,6 +283,31 @@ def test_signorini_sticks_below_the_limit():
     part = problem.contacts[0]
     assert part.friction.last is not None
     assert not MPI.COMM_WORLD.allreduce(bool(part.friction.last["slips"].any()), op=MPI.LOR)
+    _, force = problem.support_forces()
+    assert 0 < -force[0] < 10.0 * force[1]
+
+
+def test_signorini_sticks_below_the_limit_with_the_mixed_formulation():
+    """The mixed formulation, 𝔣 = 10, dragged by 1e-4 once pressed: no node slips, the bottom
+    moves by less than 1e-2 of the drag (the stick's micro-slip; measured 7.4e-3, P1 6.6e-3),
+    and the tangential force is below the limit."""
+    problem = _signorini_block(Friction("coulomb", coefficient=10.0), drag=2e-4,
+                               formulation="mixed")
+    x_dofs = problem.contacts[0].nodes.nodes * 2
+    at_press = None
+    for step in advance(problem, 1.0, StepControl(0.1)):
+        if abs(step.time - 0.5) < 1e-9:
+            at_press = problem.u.x.array[x_dofs].copy()
+    friction, comm = problem.contacts[0].friction, MPI.COMM_WORLD
+    # k_i = STICK_STIFFNESS G/L A_i with L = 1 the block's length on any number of ranks (it
+    # was once each rank's own extent, and the stick answers changed with the ranks)
+    shear = 1e3 / (2 * 1.3)
+    assert np.allclose(friction.stiffness, STICK_STIFFNESS * shear / 1.0 * friction.areas,
+                       rtol=1e-14)
+    assert not comm.allreduce(bool(friction.last["slips"].any()), op=MPI.LOR)
+    moved = comm.allreduce(float(np.max(np.abs(problem.u.x.array[x_dofs] - at_press),
+                                        initial=0.0)), op=MPI.MAX)
+    assert moved < 1e-2 * 1e-4, moved
     _, force = problem.support_forces()
     assert 0 < -force[0] < 10.0 * force[1]
 

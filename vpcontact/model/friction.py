@@ -22,8 +22,9 @@ tolerance. The friction traction and its exact (generalised) derivative are UFL 
 integrals; the history t_{n−1} is kept at the nodes of Γ3 (a field of the displacement's space,
 updated by the same return mapping at the nodes when a step is accepted).
 
-Frictional Signorini (a rigid obstacle) is not available yet: there the normal force is the
-variational inequality's multiplier and a Coulomb cone is not a box of SNES VI.
+On a Signorini part (a rigid obstacle) the normal force is the variational inequality's
+multiplier and a Coulomb cone is not a box of SNES VI: there friction is nodal, with the same
+return mapping (:mod:`vpcontact.model.nodal_friction`).
 """
 
 from __future__ import annotations

@@ -4,7 +4,12 @@
 Frictionless Signorini is a bound on one unknown per contact node, ũ_ν ≤ g (in the node's
 frame, :mod:`vpcontact.model.frames`). Its normal force λ_i ≥ 0 is the variational
 inequality's multiplier: at the solution it is what the residual of that unknown asks of the
-obstacle, λ_i = −s_i F̃_ν,i (s_i the frame's sign), and 0 where the node is free. Friction acts on
+obstacle, λ_i = −s_i F̃_ν,i (s_i the frame's sign), and 0 where the node is free. At every
+iterate λ_i is read so only where the node is on its bound (within SNES VI's tolerance), and is 0
+elsewhere: off the bound −s_i F̃_ν,i is an iterate's imbalance, not a contact force, and a
+threshold from it gave nodes not yet in contact friction (a rigid cylinder pressed into a
+block, whose contact grows: Newton stalled for 50 iterations in steps cut 16-fold; now 3–5
+per step). At a solution the two agree (F̃_ν = 0 off the bound). Friction acts on
 the node's other (tangential) unknowns as a nodal force with the same return mapping as on a
 deformable foundation (:mod:`vpcontact.model.friction`):
 
@@ -12,13 +17,25 @@ deformable foundation (:mod:`vpcontact.model.friction`):
     b_i = 𝔣 λ_i (Coulomb) or g_T(x_i) A_i where λ_i > 0 (Tresca),
 
 Δũ_τ,i the node's tangential slip over the step relative to the obstacle (its own translation
-subtracted), k_i = STICK_STIFFNESS · G/L · A_i and A_i = ∫_Γ3 φ_i da the node's share of Γ3. The
-residual of the tangential unknowns gains −f; their Jacobian rows gain −∂f/∂x̃ — in slip this
+subtracted), k_i = STICK_STIFFNESS · G/L · A_i and A_i the node's share of Γ3: HRZ-lumped
+(:mod:`vpcontact.model.nodal_areas`), positive for any degree and the row sum ∫_Γ3 φ_i da for P1.
+The residual of the tangential unknowns gains −f; their Jacobian rows gain −∂f/∂x̃ — in slip this
 includes 𝔣 f̂ ∂λ_i/∂x̃ = −𝔣 s_i f̂ (the normal unknown's Jacobian row), whose columns are the
-node's neighbours, already in the pattern. So each step is still one SNES VI solve, semi-smooth
+node's neighbours, already in the pattern (with the mixed formulation they include the pressure
+unknowns the normal residual depends on). So each step is still one SNES VI solve, semi-smooth
 Newton with the exact generalised Jacobian (LU: it is not symmetric).
 
-P1 displacements only (a P2 vertex function integrates to zero on a facet: no lumped areas).
+Any Lagrange degree and either field layout (:mod:`vpcontact.model.fields`): Coulomb's threshold
+𝔣 λ_i needs no area, and friction acts on the displacement unknowns only, found in SNES's vector
+through the layout's ``field_indices()`` (the pressure unknowns of the mixed formulation get no
+nodal term).
+
+Tresca's nodal threshold is g_T(x_i) A_i with the HRZ area, not the consistent ∫_Γ3 g_T φ_i da: a
+bound must be ≥ 0 at every node, and the consistent share of a P2 vertex is zero on a triangle
+for constant g_T (negative for some varying g_T), which would leave that node frictionless
+whatever the threshold. g_T(x_i) A_i is positive wherever g_T is, sums to g_T |Γ3| exactly for a
+constant threshold, and to ∫ g_T da up to the quadrature error of the lumped rule (O(h²)) for a
+varying one; for P1 both are the same to that order.
 """
 
 from __future__ import annotations
@@ -29,8 +46,14 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact.errors import InputError
+from vpcontact.model.extent import mesh_extent
 from vpcontact.model.friction import STICK_STIFFNESS, return_mapping
+from vpcontact.model.nodal_areas import lumped_areas
+
+
+#: A node is on its bound (in contact) within this distance of it in SNES's units (SNES VI's
+#: own tolerance for an active bound).
+ON_BOUND = 1e-8
 
 
 class NodalFriction:
@@ -40,13 +63,14 @@ class NodalFriction:
     Args:
         part: the :class:`~vpcontact.model.signorini.SignoriniPart` (framed nodes).
         shear_modulus: the body's G.
+        facet_tags: the mesh's facet tags (Γ3 is ``part.law.tag``), for the nodal areas.
+
+    Indices: ``u_tangential`` and ``u_slots`` are local indices of u's dofs; ``tangential`` and
+    ``slots`` the same unknowns' local positions in SNES's vector (set by :meth:`bind`).
     """
 
-    def __init__(self, part, shear_modulus: float):
+    def __init__(self, part, shear_modulus: float, facet_tags):
         V = part.u.function_space
-        if V.ufl_element().degree() != 1:
-            raise InputError("friction on a Signorini part needs P1 displacements (degree = 1, "
-                             "formulation = \"displacement\")", key="contact.friction")
         cd = part.nodes
         if cd.frames is None:
             raise ValueError("friction on a Signorini part needs its nodes in frames")
@@ -54,15 +78,16 @@ class NodalFriction:
         self.friction = part.law.friction
         mesh = V.mesh
         self.bs = bs = V.dofmap.index_map_bs
-        extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
+        extent = mesh_extent(mesh)
         self.comm = mesh.comm
-        self.areas = np.abs(part.monitor.weights)
+        self.areas = lumped_areas(V, facet_tags, part.law.tag, cd.nodes)
         self.stiffness = STICK_STIFFNESS * shear_modulus / extent * self.areas
-        self.slots = cd.dofs                       # the normal unknown of each node
+        self.u_slots = cd.dofs                     # the normal unknown of each node
         self.signs = cd.signs
         others = [np.array([k for k in range(bs) if k != s]) for s in cd.frames.slots]
-        self.tangential = np.array([cd.nodes[i] * bs + o for i, o in enumerate(others)],
-                                   dtype=np.int32).reshape(len(cd.nodes), bs - 1)
+        self.u_tangential = np.array([cd.nodes[i] * bs + o for i, o in enumerate(others)],
+                                     dtype=np.int32).reshape(len(cd.nodes), bs - 1)
+        self.slots, self.tangential = self.u_slots, self.u_tangential  # (u alone, until bind)
         self.free = np.ones(self.tangential.shape, dtype=bool)  # tangential rows not prescribed
         self.scale = 1.0
         self.force_old = np.zeros(self.tangential.shape)  # f_{n−1}
@@ -74,11 +99,19 @@ class NodalFriction:
         blocks = cd.frames.blocks
         self._frame_tangents = np.array([blocks[i][:, o] for i, o in enumerate(others)])
 
-    def bind(self, scale: float, dirichlet_dofs: np.ndarray) -> None:
-        """The solver's displacement scale and its Dirichlet dofs (tangential rows they hold get
-        no friction)."""
+    def bind(self, scale: float, dirichlet_dofs: np.ndarray, layout) -> None:
+        """The solver's displacement scale, its Dirichlet dofs (local u indices: tangential rows
+        they hold get no friction) and the field layout, whose ``field_indices()`` place u's
+        dofs in SNES's vector (frames and force-driven unknowns keep the layout's numbering,
+        :mod:`vpcontact.solver.variables`). Collective."""
         self.scale = scale
-        self.free = ~np.isin(self.tangential, dirichlet_dofs)
+        self.free = ~np.isin(self.u_tangential, dirichlet_dofs)
+        probe = layout.create_vector()
+        start = probe.getOwnershipRange()[0]
+        probe.destroy()
+        positions = layout.field_indices()["displacement"].getIndices() - start
+        self.slots = positions[self.u_slots].astype(np.int32)
+        self.tangential = positions[self.u_tangential].astype(np.int32)
 
     # -- the state at an iterate ------------------------------------------------------------
     def _trial(self, x: np.ndarray):
@@ -109,9 +142,11 @@ class NodalFriction:
 
     # -- hooks of the step solver --------------------------------------------------------------
     def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
-        """b ← b − f on the tangential rows (λ read off b first: −s F̃_ν where positive)."""
+        """b ← b − f on the tangential rows (λ read off b first: −s F̃_ν where positive, at
+        nodes on their bound; 0 off it — see the module docstring)."""
         xs, values = x.getArray(readonly=True), b.getArray()
-        self._lam = np.maximum(-self.signs * values[self.slots], 0.0)
+        on = self.signs * xs[self.slots] >= self.part.bound_gaps() / self.scale - ON_BOUND
+        self._lam = np.where(on, np.maximum(-self.signs * values[self.slots], 0.0), 0.0)
         self._at = xs.copy()  # the iterate λ belongs to
         st = self.state(xs, self._lam)
         values[self.tangential] -= np.where(self.free, st["force"], 0.0)

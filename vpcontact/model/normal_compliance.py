@@ -59,6 +59,7 @@ from typing import Optional
 import numpy as np
 import ufl
 
+from vpcontact.model.extent import mesh_extent
 from vpcontact.errors import InputError
 
 #: δ / h_T of the default Jacobian floor (see the module docstring).
@@ -182,13 +183,10 @@ class CompliancePart:
         self._u_old = self._t_old = None  # u and the friction traction at the last step
         self.last_friction = None  # the accepted step's friction_state()
         if law.friction is not None:
-            from mpi4py import MPI
             from vpcontact.model.friction import STICK_STIFFNESS
             self._u_old = fem.Function(V, name="u_old")
             self._t_old = fem.Function(V, name="friction_traction")
-            extent = V.mesh.comm.allreduce(float(np.ptp(V.mesh.geometry.x, axis=0).max()),
-                                           op=MPI.MAX)
-            self.stick_stiffness = STICK_STIFFNESS * shear_modulus / extent
+            self.stick_stiffness = STICK_STIFFNESS * shear_modulus / mesh_extent(V.mesh)
 
     @property
     def nodes(self):

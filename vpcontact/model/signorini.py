@@ -23,6 +23,7 @@ import dolfinx.fem.petsc  # noqa: F401  (fem.petsc)
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from vpcontact.model.extent import mesh_extent
 from vpcontact.errors import InputError
 from vpcontact.model.frames import Frames, frames, vertex_normals
 from vpcontact.model.obstacle import LevelSet, gap_along_normal
@@ -95,7 +96,7 @@ class Signorini:
                 raise InputError("friction on a turning or deforming obstacle is not available "
                                  "yet (only translations are subtracted from the slip)",
                                  key="contact.friction")
-            part.friction = NodalFriction(part, shear_modulus)
+            part.friction = NodalFriction(part, shear_modulus, facet_tags)
         return part
 
     def obstacle_at(self, time: float) -> LevelSet:
@@ -584,8 +585,7 @@ class DrivenSignoriniPart(SignoriniPart):
         self._slopes = cd.normals @ self._e[:cd.normals.shape[1]]  # e · ν_i
         if cd.unreachable is not None:
             self._slopes[cd.unreachable] = 0.0  # (no contact there)
-        extent = np.ptp(V.mesh.geometry.x, axis=0).max()
-        self._delta = 1e-6 * self.comm.allreduce(float(extent), op=MPI.MAX)
+        self._delta = 1e-6 * mesh_extent(V.mesh)
         self._time = 0.0
         self.increment = 0.0
         self._predicted = self._touching_displacement()

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from vpcontact.model.extent import mesh_extent
 from vpcontact.output.fields import ContactHistory, boundary_faces, deformed_cells
 
 
@@ -25,8 +26,7 @@ def deformed_configuration(path: str | Path, u, von_mises, title: str, scale: fl
     """
     mesh = u.function_space.mesh
     comm = mesh.comm
-    x = mesh.geometry.x
-    size = comm.allreduce(float(np.ptp(x, axis=0).max()) if len(x) else 0.0, op=max)
+    size = mesh_extent(mesh)
     umax = comm.allreduce(float(np.abs(u.x.array).max(initial=0.0)), op=max)
     if scale is None:
         scale = 0.1 * size / umax if umax > 0 else 1.0

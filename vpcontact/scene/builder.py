@@ -20,6 +20,7 @@ import ufl
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
+from vpcontact.model.extent import mesh_extent
 from vpcontact.model.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
 from vpcontact.model.friction import Friction
 from vpcontact.model.normal_compliance import NormalCompliance
@@ -173,7 +174,7 @@ def _boundary_parts(scene: Scene, mesh, gmsh_tags):
     """One facet tag per part (1, 2, ... in scene order); every part non-empty, none overlapping."""
     fdim = mesh.topology.dim - 1
     mesh.topology.create_connectivity(fdim, mesh.topology.dim)
-    extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
+    extent = mesh_extent(mesh)
     indices, values, part_tags = [], [], {}
     for i, (name, part) in enumerate(scene.boundaries.items(), start=1):
         if part.tag is not None:

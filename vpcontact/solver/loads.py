@@ -11,6 +11,7 @@ import ufl
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
+from vpcontact.model.extent import mesh_extent
 from vpcontact.errors import InputError
 
 #: A load is a function (x, t) -> UFL expression, x the spatial coordinate, t a time Constant.
@@ -42,7 +43,7 @@ class PointDofs:
         dim = mesh.topology.dim
         at = np.zeros(3)
         at[:dim] = np.asarray(load.at, dtype=np.float64)[:dim]
-        extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
+        extent = mesh_extent(mesh)
         tol = 1e-8 * extent
         blocks = fem.locate_dofs_geometrical(
             V, lambda x: np.linalg.norm(x - at[:, None], axis=0) <= tol)

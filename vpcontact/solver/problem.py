@@ -27,6 +27,7 @@ import dolfinx.fem.petsc  # noqa: F401  (fem.petsc)
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from vpcontact.model.extent import mesh_extent
 from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor, past_nodes
 from vpcontact.errors import (ConvergenceError, InputError, NonFiniteStateError,
                               ObstacleOutOfReach, StepRejected)
@@ -220,7 +221,7 @@ class QuasistaticProblem:
         options = {**defaults, **(petsc_options or {})}
 
         # Unknown scale for SNES: an exact power of two far below any displacement of interest.
-        extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()), op=MPI.MAX)
+        extent = mesh_extent(mesh)
         scale = 2.0 ** (np.floor(np.log2(extent)) - 40)
         self._extent = extent
         self._point_loads = [PointDofs(self.V, p) for p in loads.points]
@@ -249,7 +250,7 @@ class QuasistaticProblem:
         if bounds is not None:
             self.solver.set_bounds(*bounds)
         for term in nodal_terms:
-            term.bind(scale, self.dirichlet.prescribed)
+            term.bind(scale, self.dirichlet.prescribed, self.fields)
         self._correction_expr = None  # compiled on first use (outputs of the mixed formulation)
         self._contact_active = False  # after the last accepted step
         self.step_index = 0

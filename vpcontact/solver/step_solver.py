@@ -20,6 +20,7 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from vpcontact.model.extent import mesh_extent
 from vpcontact.errors import ConvergenceError, InputError
 from vpcontact.solver import linear as linear_solvers
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
@@ -145,8 +146,7 @@ class StepSolver:
         self._bounds = None
         self._last_active: Optional[np.ndarray] = None  # the last solve's active bounds
         mesh = self.u.function_space.mesh
-        self._extent = mesh.comm.allreduce(float(np.ptp(mesh.geometry.x, axis=0).max()),
-                                           op=MPI.MAX)
+        self._extent = mesh_extent(mesh)
         self._fnorm0 = 0.0
         self._loaded = self._x.duplicate()  # the iterate whose refresh is current
         self._loaded_valid = False
