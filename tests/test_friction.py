@@ -193,7 +193,7 @@ def test_friction_on_a_force_driven_obstacle_is_refused(shared_tmp_path, capsys)
         assert re.search(r"sig\.toml:\d+: contact\.friction: .*driven by a force", err), err
 
 
-def _signorini_block(friction, floor_motion=None, drag=0.02, **discretization):
+def _signorini_block(friction, floor_motion=None, drag=0.02, drag_path=None, **discretization):
     """The dragged block on a rigid floor (Signorini) with friction; or held by its top while
     the floor slides under it (``floor_motion``). ``discretization``: ``degree`` and
     ``formulation`` of the problem (default: P1 displacements)."""
@@ -202,6 +202,8 @@ def _signorini_block(friction, floor_motion=None, drag=0.02, **discretization):
     tags = tag_facets(msh, {1: lambda x: np.isclose(x[1], 0.25), 2: lambda x: np.isclose(x[1], 0.0)})
 
     def ux(x, t):
+        if drag_path is not None:
+            return np.full(x.shape[1], drag_path(t))
         return np.full(x.shape[1], 0.0 if floor_motion else drag * max(t - 0.5, 0.0))
 
     def uy(x, t):
@@ -310,6 +312,31 @@ def test_signorini_sticks_below_the_limit_with_the_mixed_formulation():
     assert moved < 1e-2 * 1e-4, moved
     _, force = problem.support_forces()
     assert 0 < -force[0] < 10.0 * force[1]
+
+
+def test_a_restored_checkpoint_keeps_the_stick_forces():
+    """The block dragged until it slides, then pulled back a little: its nodes stick again with
+    forces that depend on the history (the return mapping's f_{n−1}). A run restored from a
+    checkpoint taken then ends where an uninterrupted one does. (Tresca: with
+    Coulomb, Newton cycles on this reversal; see the README's friction section.)"""
+    friction = Friction("tresca", threshold=2.0)
+
+    def path(t):  # forward to t = 0.8, then back by 1e-5 (the block unloads elastically)
+        return 0.02 * max(min(t, 0.8) - 0.5, 0.0) - 1e-5 * max(t - 0.8, 0.0) / 0.2
+
+    first = _signorini_block(friction, drag_path=path)
+    for _ in advance(first, 0.9, StepControl(0.1)):
+        pass
+    scalars, arrays = first.checkpoint()
+    for _ in advance(first, 1.0, StepControl(0.1)):  # on, uninterrupted
+        pass
+    second = _signorini_block(friction, drag_path=path)
+    second.restore(scalars, arrays)
+    for _ in advance(second, 1.0, StepControl(0.1)):
+        pass
+    expected = first.support_forces()[1]
+    assert abs(expected[0]) < 2.0 * (1 - 1e-3)  # below the slip force: sticking again
+    assert np.allclose(second.support_forces()[1], expected, rtol=1e-9, atol=0.0)
 
 
 def test_a_rigid_floor_sliding_under_a_held_block_drags_it():

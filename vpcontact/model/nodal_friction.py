@@ -196,6 +196,27 @@ class NodalFriction:
             A.setValue(int(row), int(col), value, addv=PETSc.InsertMode.ADD_VALUES)
         A.assemble()
 
+    #: What :meth:`arrays` saves of the accepted step's state (for the outputs).
+    _LAST = ("force", "slip", "slips")
+
+    def arrays(self) -> dict:
+        """The nodal history a checkpoint must hold (this rank's nodes): f_{n−1}, x̃_τ of the
+        last step and the last step's state for the outputs."""
+        arrays = {"friction_force_old": self.force_old, "friction_x_old": self.x_old}
+        if self.last is not None:
+            arrays.update({f"friction_last_{k}": self.last[k] for k in self._LAST})
+        return arrays
+
+    def restore(self, arrays: dict) -> None:
+        """Continue from :meth:`arrays` (a checkpoint without them: no history yet)."""
+        if "friction_force_old" not in arrays:
+            return
+        self.force_old = np.array(arrays["friction_force_old"], dtype=float)
+        self.x_old = np.array(arrays["friction_x_old"], dtype=float)
+        self.shift[:] = 0.0
+        if "friction_last_force" in arrays:
+            self.last = {k: np.array(arrays[f"friction_last_{k}"]) for k in self._LAST}
+
     def commit(self, x: np.ndarray) -> None:
         """The step is accepted at x (SNES units; λ of the last residual, evaluated there)."""
         st = self.state(x, self._lam)

@@ -528,12 +528,14 @@ class SignoriniPart:
         return {}
 
     def arrays(self) -> dict:
-        """Arrays (this rank's) a checkpoint must hold to continue."""
-        return {}
+        """Arrays (this rank's) a checkpoint must hold to continue: friction's nodal history."""
+        return {} if self.friction is None else self.friction.arrays()
 
     def restore(self, state: dict, time: float, arrays: Optional[dict] = None) -> None:
         """Continue from :meth:`state` (and :meth:`arrays`) at ``time``."""
         self.update(time)
+        if self.friction is not None:
+            self.friction.restore(arrays or {})
 
     def pressure(self) -> np.ndarray:
         return self.monitor.nodal_pressure()
