@@ -339,6 +339,62 @@ def test_a_restored_checkpoint_keeps_the_stick_forces():
     assert np.allclose(second.support_forces()[1], expected, rtol=1e-9, atol=0.0)
 
 
+def _turned_block(friction, angle: float):
+    """The dragged block of :func:`_signorini_block` (Coulomb, pressed then dragged) with the
+    mesh, the floor and the top's motion turned by ``angle`` about the origin."""
+    comm = MPI.COMM_WORLD
+    c, s = np.cos(angle), np.sin(angle)
+    Q = np.array([[c, -s], [s, c]])
+    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [16, 4])
+    msh.geometry.x[:, :2] = msh.geometry.x[:, :2] @ Q.T
+
+    def height(x):  # the reference y of a turned point
+        return -s * x[0] + c * x[1]
+
+    tags = tag_facets(msh, {1: lambda x: np.isclose(height(x), 0.25),
+                            2: lambda x: np.isclose(height(x), 0.0)})
+
+    def motion(t):
+        return Q @ np.array([0.02 * max(t - 0.5, 0.0), -0.002 * min(t / 0.5, 1.0)])
+
+    def ux(x, t):
+        return np.full(x.shape[1], motion(t)[0])
+
+    def uy(x, t):
+        return np.full(x.shape[1], motion(t)[1])
+
+    floor = Signorini(2, obstacle=height, max_distance=1.0, friction=friction)
+    problem = QuasistaticProblem(msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
+                                 dirichlet=[Dirichlet(1, (ux, uy), "top")], contact=floor)
+    return problem, Q
+
+
+@pytest.mark.parametrize("kind", ["coulomb", "tresca"])
+def test_a_turned_problem_gives_the_turned_forces_and_the_same_slips(kind):
+    """Rotation invariance: the pressed and dragged block turned by 30° (mesh, floor, motion)
+    carries the turned contact force of the upright one at every step, and its contact nodes
+    slip by the same amounts, to 1e-8 (the frames at the contact nodes turn with the floor)."""
+    friction = (Friction("coulomb", coefficient=0.3) if kind == "coulomb"
+                else Friction("tresca", threshold=2.0))
+    upright, _ = _turned_block(friction, 0.0)
+    turned, Q = _turned_block(friction, np.pi / 6)
+    steps = list(zip(advance(upright, 1.0, StepControl(0.1)), advance(turned, 1.0, StepControl(0.1))))
+    forces = [], []
+    for a, b in steps:
+        assert a.time == pytest.approx(b.time, abs=1e-12)
+        forces[0].append(Q @ upright.support_forces()[1])
+        forces[1].append(turned.support_forces()[1])
+        assert np.allclose(forces[1][-1], forces[0][-1], rtol=0.0,
+                           atol=1e-8 * np.abs(forces[0][-1]).max()), (a.time, forces)
+    assert abs(forces[0][-1] @ Q[:, 0]) > 0.1  # it was dragged along the floor
+    slips = []  # the last step's, as multisets (the node numbering differs)
+    for problem in (upright, turned):
+        local = np.abs(problem.contacts[0].last_friction["slip"]).ravel()
+        slips.append(np.sort(np.concatenate(MPI.COMM_WORLD.allgather(local))))
+    assert slips[0].size >= 17 and slips[0].max() > 1e-6
+    assert np.allclose(slips[1], slips[0], rtol=0.0, atol=1e-8 * slips[0].max())
+
+
 def test_a_rigid_floor_sliding_under_a_held_block_drags_it():
     """The slip is relative to the obstacle: the floor translates by 0.02 (t − 0.5) under the
     block, which its top holds; the friction force on the block is +𝔣 × normal (along the
