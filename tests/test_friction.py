@@ -373,20 +373,25 @@ def _turned_block(friction, angle: float):
 def test_a_turned_problem_gives_the_turned_forces_and_the_same_slips(kind):
     """Rotation invariance: the pressed and dragged block turned by 30° (mesh, floor, motion)
     carries the turned contact force of the upright one at every step, and its contact nodes
-    slip by the same amounts, to 1e-8 (the frames at the contact nodes turn with the floor)."""
+    slip by the same amounts. While it slides, to round-off (1e-12; measured 2e-15); while the
+    nodes stick, to 1e-5 (measured 1.5e-6 to 4e-6): the stick stiffness 1e3 G/L takes L from the
+    mesh's bounding box, which is 0.9 % shorter for the turned block (see the README)."""
     friction = (Friction("coulomb", coefficient=0.3) if kind == "coulomb"
                 else Friction("tresca", threshold=2.0))
     upright, _ = _turned_block(friction, 0.0)
     turned, Q = _turned_block(friction, np.pi / 6)
-    steps = list(zip(advance(upright, 1.0, StepControl(0.1)), advance(turned, 1.0, StepControl(0.1))))
-    forces = [], []
-    for a, b in steps:
+    sliding = 0
+    for a, b in zip(advance(upright, 1.0, StepControl(0.1)), advance(turned, 1.0, StepControl(0.1))):
         assert a.time == pytest.approx(b.time, abs=1e-12)
-        forces[0].append(Q @ upright.support_forces()[1])
-        forces[1].append(turned.support_forces()[1])
-        assert np.allclose(forces[1][-1], forces[0][-1], rtol=0.0,
-                           atol=1e-8 * np.abs(forces[0][-1]).max()), (a.time, forces)
-    assert abs(forces[0][-1] @ Q[:, 0]) > 0.1  # it was dragged along the floor
+        expected, force = Q @ upright.support_forces()[1], turned.support_forces()[1]
+        slips = upright.contacts[0].last_friction["slips"]
+        everywhere = MPI.COMM_WORLD.allreduce(bool(np.all(slips)), op=MPI.LAND)
+        sliding += everywhere
+        tolerance = 1e-12 if everywhere else 1e-5
+        assert np.allclose(force, expected, rtol=0.0, atol=tolerance * np.abs(expected).max()), (
+            a.time, force, expected)
+    assert sliding >= 3
+    assert abs(expected @ Q[:, 0]) > 0.1  # it was dragged along the floor
     slips = []  # the last step's, as multisets (the node numbering differs)
     for problem in (upright, turned):
         local = np.abs(problem.contacts[0].last_friction["slip"]).ravel()
