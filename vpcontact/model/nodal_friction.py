@@ -197,7 +197,7 @@ class NodalFriction:
         A.assemble()
 
     #: What :meth:`arrays` saves of the accepted step's state (for the outputs).
-    _LAST = ("force", "slip", "slips")
+    _LAST = ("force", "slip", "slips", "lam")
 
     def arrays(self) -> dict:
         """The nodal history a checkpoint must hold (this rank's nodes): f_{n−1}, x̃_τ of the
@@ -216,6 +216,21 @@ class NodalFriction:
         self.shift[:] = 0.0
         if "friction_last_force" in arrays:
             self.last = {k: np.array(arrays[f"friction_last_{k}"]) for k in self._LAST}
+
+    def predict(self, x: PETSc.Vec) -> None:
+        """The step's initial guess sticks: the tangential unknowns of the nodes in contact at
+        the last step where the obstacle has taken them (no slip). Newton then starts on the
+        stick branch with its stiffness k and leaves it where the trial force leaves the cone.
+        From an extrapolated guess instead (the predictor continues the last step's motion), a
+        step that reverses the drag after sliding starts with every node slipping forward, and
+        with the stick interval only 2b/k wide Newton jumps across it, slipping forward and
+        back in turn (measured: no convergence in 50 iterations with a 1e−5 reversal)."""
+        if self.last is None:
+            return
+        values = x.getArray()
+        held = self.free & (self.last["lam"] > 0)[:, None]
+        stuck = self.x_old + self.shift / self.scale
+        values[self.tangential] = np.where(held, stuck, values[self.tangential])
 
     def commit(self, x: np.ndarray) -> None:
         """The step is accepted at x (SNES units; λ of the last residual, evaluated there)."""

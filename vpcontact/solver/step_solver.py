@@ -512,6 +512,8 @@ class StepSolver:
             self._P.to_snes(xs, self._x)
         if self._bounds is not None:
             self._snap_to_bounds(self._x)
+        for term in self._nodal:  # (friction: the guess sticks where the nodes touched)
+            term.predict(self._x)
         self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
         start = _time.perf_counter()  # (kernel and assembly outside SNES count as SNES work,
         self._round_off_scale = max(self._force_scale, self._free_residual_norm())
