@@ -131,9 +131,9 @@ def register(prefix: str, space: CoarseSpace) -> None:
 def _lookup(prefix: str) -> CoarseSpace:
     matches = [key for key in _SPACES.keys() if prefix.startswith(key)]
     if not matches:
-        raise SolverOptionError(f"no P1 coarse space registered for the options prefix {prefix!r} "
-                          "(pc_type python with vpcontact's p-multigrid needs the mixed "
-                          "formulation's step solver)")
+        raise SolverOptionError(f"no P1 coarse space registered for the options prefix "
+                                f"{prefix!r} (pc_type python with vpcontact's p-multigrid "
+                                "needs the mixed formulation's step solver)")
     return _SPACES[max(matches, key=len)]
 
 
