@@ -95,3 +95,54 @@ def test_two_rank_partitions_repeat(tmp_path):
     env = {k: v for k, v in clean_environment().items() if k != "SCOTCH_PTHREAD_NUMBER"}
     runs = [_two_rank_run(tmp_path, _PARTITION, [], env) for _ in range(3)]
     assert "PARTITION" in runs[0] and runs[1] == runs[0] and runs[2] == runs[0], runs
+
+
+def _friction_scene(tmp_path, law: str):
+    """The pressed and dragged block of tests/test_friction.py with Coulomb friction on a rigid
+    floor (Signorini: nodal friction) or a compliant one."""
+    from test_friction import DRAGGED
+
+    text = DRAGGED.replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    if law == "signorini":
+        text = text.replace('type = "normal_compliance"', 'type = "signorini"').replace(
+            "mu = 1e-3\n", 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n')
+    path = tmp_path / f"{law}.toml"
+    path.write_text(text)
+    return path
+
+
+def _contact_rows(path):
+    data = np.genfromtxt(path, delimiter=",", names=True)
+    return data[np.lexsort((data["y"], data["x"], data["t"]))]
+
+
+@pytest.mark.parametrize("law", ["signorini", "normal_compliance"])
+def test_two_ranks_reproduce_the_serial_friction_history(tmp_path, law):
+    """Friction (issue 24): `mpirun -n 2` gives the serial forces, tangential tractions, slips
+    and stick/slip states of every contact node at every step, to solver tolerance."""
+    scene = _friction_scene(tmp_path, law)
+    runs = {}
+    for ranks in (1, 2):
+        out = tmp_path / f"out{ranks}"
+        command = [sys.executable, "-m", "vpcontact", "run", str(scene), "--out", str(out),
+                   "--quiet"]
+        if ranks > 1:
+            root = ["--allow-run-as-root"] if os.geteuid() == 0 else []
+            command = [shutil.which("mpirun"), *root, "-n", "2", *command]
+        done = subprocess.run(command, capture_output=True, text=True, timeout=600,
+                              env=clean_environment())
+        assert done.returncode == 0, done.stderr[-3000:]
+        runs[ranks] = (np.genfromtxt(out / "reactions.csv", delimiter=",", names=True),
+                       _contact_rows(out / "contact.csv"))
+    (r1, c1), (r2, c2) = runs[1], runs[2]
+    assert r1.shape == r2.shape and c1.shape == c2.shape
+    for name in r1.dtype.names:
+        scale = max(np.abs(r1[name]).max(), 1e-300)
+        np.testing.assert_allclose(r2[name], r1[name], rtol=0, atol=1e-8 * scale, err_msg=name)
+    for name in ("tangential_traction", "slip_increment", "slip", "pressure"):
+        scale = np.abs(c1[name]).max()
+        assert scale > 0, name
+        np.testing.assert_allclose(c2[name], c1[name], rtol=0, atol=1e-7 * scale, err_msg=name)
+    last = np.isclose(c1["t"], c1["t"].max())
+    assert c1["slipping"][last].sum() >= 10
+    assert np.array_equal(c2["slipping"][last], c1["slipping"][last])
