@@ -39,7 +39,6 @@ indenters are two ``[[contact]]`` tables; a block resting on a foundation needs 
 
 from __future__ import annotations
 
-import argparse
 import os
 from pathlib import Path
 
@@ -47,6 +46,7 @@ import numpy as np
 from mpi4py import MPI
 
 from vpcontact import scene as scenes
+from vpcontact.cli import scene_demo_main
 from vpcontact.output import Session
 from vpcontact.scene import build
 
@@ -94,17 +94,7 @@ def _creep_figure(out: Path, session) -> None:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description="Indentation creep of a Perzyna block")
-    parser.add_argument("--out", default="output/indentation_creep", help="output folder")
-    parser.add_argument("--cells", type=int, nargs=2, help="cells along x1 and x2 (default 64 32)")
-    parser.add_argument("--k", type=float, help="time step (default 0.025)")
-    args = parser.parse_args(argv)
-    if args.cells is not None and min(args.cells) < 1:
-        parser.error("--cells must be >= 1")
-    if args.k is not None and not 0 < args.k <= 1:
-        parser.error("--k must lie in (0, 1]")
-    run(args.out, tuple(args.cells) if args.cells else None, args.k)
-    return 0
+    return scene_demo_main(run, "Indentation creep of a Perzyna block", "output/indentation_creep", "64 32", argv)
 
 
 if __name__ == "__main__":

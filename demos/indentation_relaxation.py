@@ -38,7 +38,6 @@ indenter's force as the unknown, which this displacement-driven setting leaves f
 
 from __future__ import annotations
 
-import argparse
 import os
 from pathlib import Path
 
@@ -46,6 +45,7 @@ import numpy as np
 from mpi4py import MPI
 
 from vpcontact import scene as scenes
+from vpcontact.cli import scene_demo_main
 from vpcontact.output import Session
 from vpcontact.scene import build
 
@@ -98,17 +98,7 @@ def _relaxation_figure(out: Path, session) -> None:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description="Indentation and relaxation of a Perzyna block")
-    parser.add_argument("--out", default="output/indentation_relaxation", help="output folder")
-    parser.add_argument("--cells", type=int, nargs=2, help="cells along x1 and x2 (default 128 64)")
-    parser.add_argument("--k", type=float, help="time step (default 0.025)")
-    args = parser.parse_args(argv)
-    if args.cells is not None and min(args.cells) < 1:
-        parser.error("--cells must be >= 1")
-    if args.k is not None and not 0 < args.k <= 1:
-        parser.error("--k must lie in (0, 1]")
-    run(args.out, tuple(args.cells) if args.cells else None, args.k)
-    return 0
+    return scene_demo_main(run, "Indentation and relaxation of a Perzyna block", "output/indentation_relaxation", "128 64", argv)
 
 
 if __name__ == "__main__":

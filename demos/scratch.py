@@ -32,7 +32,6 @@ With ``CI`` set, the run uses a coarser mesh and larger steps.
 
 from __future__ import annotations
 
-import argparse
 import os
 from pathlib import Path
 
@@ -40,6 +39,7 @@ import numpy as np
 from mpi4py import MPI
 
 from vpcontact import scene as scenes
+from vpcontact.cli import scene_demo_main
 from vpcontact.output import Session
 from vpcontact.scene import build
 
@@ -105,17 +105,7 @@ def _figure(out: Path, session) -> None:
 
 
 def main(argv=None) -> int:
-    parser = argparse.ArgumentParser(description="A scratch test of a Perzyna plate")
-    parser.add_argument("--out", default="output/scratch", help="output folder")
-    parser.add_argument("--cells", type=int, nargs=2, help="cells along x1 and x2 (default 80 20)")
-    parser.add_argument("--k", type=float, help="time step (default 0.025)")
-    args = parser.parse_args(argv)
-    if args.cells is not None and min(args.cells) < 1:
-        parser.error("--cells must be >= 1")
-    if args.k is not None and not 0 < args.k <= 1:
-        parser.error("--k must lie in (0, 1]")
-    run(args.out, tuple(args.cells) if args.cells else None, args.k)
-    return 0
+    return scene_demo_main(run, "A scratch test of a Perzyna plate", "output/scratch", "80 20", argv)
 
 
 if __name__ == "__main__":

@@ -195,14 +195,15 @@ def test_mixed_refuses_laws_that_change_the_volume():
                            dirichlet=_pushed(3, [0], lambda t: t), formulation="mixed")
 
 
-def _paper_3d(linear: str, T: float, n: int = 2):
-    """The bundled signorini_3d (mixed by default) on 3n×n×n cells, run to T with k = 0.01."""
+def _bundled_3d(name: str, linear: str, T: float, n: int = 2):
+    """The bundled 3-D scene ``name`` (mixed by default) on 3n×n×n cells, run to T with
+    k = 0.01: (scene, problem, the contact force's z component at every step)."""
     import dataclasses
 
     from vpcontact import scene as scenes
     from vpcontact.solver import StepControl, advance
 
-    scene = scenes.load(scenes.bundled()["signorini_3d"])
+    scene = scenes.load(scenes.bundled()[name])
     scene = dataclasses.replace(
         scene, mesh=dataclasses.replace(scene.mesh, cells=(3 * n, n, n)),
         time=dataclasses.replace(scene.time, T=T, k=0.01),
@@ -210,6 +211,11 @@ def _paper_3d(linear: str, T: float, n: int = 2):
     problem = scenes.build(scene).problem
     forces = [problem.support_forces()[1][2] for _ in advance(problem, T, StepControl(0.01))]
     return scene, problem, np.array(forces)
+
+
+def _paper_3d(linear: str, T: float, n: int = 2):
+    """The bundled signorini_3d (the paper's 3-D test)."""
+    return _bundled_3d("signorini_3d", linear, T, n)
 
 
 def test_block_preconditioner_inside_the_vi_matches_the_direct_solver():
@@ -233,30 +239,13 @@ def test_block_preconditioner_inside_the_vi_matches_the_direct_solver():
     assert 5 <= per_solve <= 80, (per_solve, counters)
 
 
-def _normal_compliance_3d(linear: str, T: float = 0.05, n: int = 2):
-    """The bundled normal_compliance_3d (mixed by default) on 3n×n×n cells, to T, k = 0.01."""
-    import dataclasses
-
-    from vpcontact import scene as scenes
-    from vpcontact.solver import StepControl, advance
-
-    scene = scenes.load(scenes.bundled()["normal_compliance_3d"])
-    scene = dataclasses.replace(
-        scene, mesh=dataclasses.replace(scene.mesh, cells=(3 * n, n, n)),
-        time=dataclasses.replace(scene.time, T=T, k=0.01),
-        solver=dataclasses.replace(scene.solver, linear=linear))
-    problem = scenes.build(scene).problem
-    forces = [problem.support_forces()[1][2] for _ in advance(problem, T, StepControl(0.01))]
-    return problem, np.array(forces)
-
-
 def test_block_preconditioner_without_the_vi_matches_the_direct_solver():
     """Without SNES VI (normal compliance) the step's KSP is PETSc's own: its field split must
     still get the block solvers of vpcontact.solver.linear (they read their options when SNES
     first sets them up, inside the solve) — the p-multigrid on u and Chebyshev on the weighted
     mass matrix — and give the direct solver's answer."""
-    direct, f_direct = _normal_compliance_3d("direct")
-    iterative, f_iterative = _normal_compliance_3d("iterative")
+    _, direct, f_direct = _bundled_3d("normal_compliance_3d", "direct", 0.05)
+    _, iterative, f_iterative = _bundled_3d("normal_compliance_3d", "iterative", 0.05)
     assert iterative.solver.linear == "iterative"
     pc = iterative.solver.snes.getKSP().getPC()
     assert pc.getType() == "fieldsplit"

@@ -93,6 +93,22 @@ def run_script(main) -> None:
         sys.exit(1)
 
 
+def scene_demo_main(run, description: str, out: str, cells: str, argv=None) -> int:
+    """The command line of a demo on a bundled 2-D scene: ``--out``, ``--cells N1 N2`` (default
+    ``cells``, the scene's) and ``--k``, validated, then ``run(out, cells or None, k or None)``."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--out", default=out, help="output folder")
+    parser.add_argument("--cells", type=int, nargs=2, help=f"cells along x1 and x2 (default {cells})")
+    parser.add_argument("--k", type=float, help="time step (default 0.025)")
+    args = parser.parse_args(argv)
+    if args.cells is not None and min(args.cells) < 1:
+        parser.error("--cells must be >= 1")
+    if args.k is not None and not 0 < args.k <= 1:
+        parser.error("--k must lie in (0, 1]")
+    run(args.out, tuple(args.cells) if args.cells else None, args.k)
+    return 0
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="vpcontact", description=__doc__.splitlines()[0])
     verbose = argparse.ArgumentParser(add_help=False)

@@ -41,6 +41,7 @@ from dolfinx.cpp.fem.petsc import interpolation_matrix
 from petsc4py import PETSc
 
 from vpcontact.errors import SolverOptionError
+from vpcontact.solver.vi_linear import rigid_body_modes
 
 #: Options of the smoothing on the P2 level: two Chebyshev–Jacobi sweeps (before and after the
 #: coarse correction), the spectrum bound estimated for every new matrix.
@@ -91,35 +92,11 @@ class CoarseSpace:
             P = rotated
         self.interpolation = P
         self.block_size = self.V1.dofmap.index_map_bs
-        self.modes = _rigid_body_modes(self.V1)
+        self.modes = rigid_body_modes(self.V1)  # Cartesian: P carries the frames
 
     def destroy(self) -> None:
         self.interpolation.destroy()
         self.modes.destroy()
-
-
-def _rigid_body_modes(V1: fem.FunctionSpace) -> PETSc.NullSpace:
-    """Orthonormal translations and rotations on the P1 vertices (Cartesian components)."""
-    bs = V1.dofmap.index_map_bs
-    owned = V1.dofmap.index_map.size_local
-    x = V1.tabulate_dof_coordinates()[:owned]
-    zero = np.zeros(owned)
-    fields = [np.eye(bs)[i] * np.ones((owned, 1)) for i in range(bs)]
-    if bs == 2:
-        fields.append(np.column_stack([-x[:, 1], x[:, 0]]))
-    else:
-        fields += [np.column_stack([-x[:, 1], x[:, 0], zero]),
-                   np.column_stack([zero, -x[:, 2], x[:, 1]]),
-                   np.column_stack([x[:, 2], zero, -x[:, 0]])]
-    vectors = []
-    for field in fields:
-        vec = PETSc.Vec().createMPI((owned * bs, None), bsize=bs, comm=V1.mesh.comm)
-        vec.array[:] = field.ravel()
-        for prev in vectors:
-            vec.axpy(-vec.dot(prev), prev)
-        vec.normalize()
-        vectors.append(vec)
-    return PETSc.NullSpace().create(vectors=vectors, comm=V1.mesh.comm)
 
 
 def register(prefix: str, space: CoarseSpace) -> None:
