@@ -2,7 +2,7 @@
 """The size of a mesh: the longest side of its bounding box, the same on every rank.
 
 Lengths that scale tolerances and penalty-like stiffnesses (friction's stick stiffness
-STICK_STIFFNESS · G / L, SNES's unknown scale, search tolerances) are taken relative to it. The
+SNES's unknown scale, search tolerances) are taken relative to it. The
 maximum over ranks of each rank's own extent is not it: a rank holding half of a bar sees half
 its length, so the stick stiffness (and the answers where a body sticks) depended on the number
 of ranks.

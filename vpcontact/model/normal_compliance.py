@@ -59,7 +59,6 @@ from typing import Optional
 import numpy as np
 import ufl
 
-from vpcontact.model.extent import mesh_extent
 from vpcontact.errors import InputError
 
 #: δ / h_T of the default Jacobian floor (see the module docstring).
@@ -184,9 +183,13 @@ class CompliancePart:
         self.last_friction = None  # the accepted step's friction_state()
         if law.friction is not None:
             from vpcontact.model.friction import STICK_STIFFNESS
+            from vpcontact.model.nodal_areas import facet_sizes
             self._u_old = fem.Function(V, name="u_old")
             self._t_old = fem.Function(V, name="friction_traction")
-            self.stick_stiffness = STICK_STIFFNESS * shear_modulus / mesh_extent(V.mesh)
+            # k_t = STICK_STIFFNESS G / h, h the local facet size (a field on Γ3's nodes)
+            h, self._scalar_of = facet_sizes(V, facet_tags, law.tag)
+            self.stick_stiffness = fem.Function(h.function_space, name="stick_stiffness")
+            self.stick_stiffness.x.array[:] = STICK_STIFFNESS * shear_modulus / h.x.array
 
     @property
     def nodes(self):
@@ -236,12 +239,18 @@ class CompliancePart:
             w = values[rows]
             return w - np.einsum("ij,ij->i", w, normals)[:, None] * normals
         slip = tangential(self.u.x.array - self._u_old.x.array)
-        trial = tangential(self._t_old.x.array) - self.stick_stiffness * slip
+        trial = tangential(self._t_old.x.array) - self.nodal_stick_stiffness()[:, None] * slip
         pressure = -self.law.normal_stress(cd.normal_displacement(self.u) - cd.gap)
         bound = self.law.friction.bound_at(pressure, cd.points)
         traction = return_mapping(trial, bound)
         slips = (np.linalg.norm(trial, axis=1) > bound * (1 + 1e-12)) & (bound > 0)
         return {"traction": traction, "slip": slip, "slips": slips, "rows": rows}
+
+    def nodal_stick_stiffness(self) -> np.ndarray:
+        """k_t at this rank's contact nodes (``nodes.nodes``)."""
+        from vpcontact.model.nodal_areas import at_blocks
+        return at_blocks(self.u.function_space, self._scalar_of, self.stick_stiffness.x.array,
+                          self.nodes.nodes)
 
     def update(self, time: float) -> None:
         pass

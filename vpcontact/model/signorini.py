@@ -92,12 +92,33 @@ class Signorini:
                     True if self.friction is not None else rotate)
         if self.friction is not None:
             from vpcontact.model.nodal_friction import NodalFriction
-            if self.rotation is not None or self.obstacle_moves:
-                raise InputError("friction on a turning or deforming obstacle is not available "
-                                 "yet (only translations are subtracted from the slip)",
+            if self.obstacle_moves:
+                raise InputError("friction on a deforming obstacle (a level set of x and t) is "
+                                 "not available: its surface has no material points to slip "
+                                 "against (give it a translation and a rotation instead)",
                                  key="contact.friction")
             part.friction = NodalFriction(part, shear_modulus, facet_tags)
         return part
+
+    def _translation(self, time: float) -> np.ndarray:
+        d = np.zeros(3)
+        if self.translation is not None:
+            shift = np.asarray(self.translation(time), dtype=np.float64).reshape(-1)
+            d[:len(shift)] = shift
+        return d
+
+    def obstacle_motion(self, t0: float, t1: float, points: np.ndarray) -> np.ndarray:
+        """How far (N, 3) the obstacle's material points at ``points`` (N, 3) at ``t0`` move
+        until ``t1``: a point X of φ's frame is at c + Q(t)(X − c) + d(t), so y at t0 goes to
+        c + Q(t1) Q(t0)ᵀ (y − c − d(t0)) + d(t1)."""
+        d0, d1 = self._translation(t0), self._translation(t1)
+        if self.rotation is None:
+            return np.broadcast_to(d1 - d0, np.shape(points)).copy()
+        q0 = np.asarray(self.rotation(t0), dtype=np.float64).reshape(3, 3)
+        q1 = np.asarray(self.rotation(t1), dtype=np.float64).reshape(3, 3)
+        c = np.asarray(self.rotation_center, dtype=np.float64)
+        y = np.asarray(points, dtype=np.float64)
+        return c + (y - c - d0) @ (q1 @ q0.T).T + d1 - y
 
     def obstacle_at(self, time: float) -> LevelSet:
         """The obstacle's level set at ``time``, as a function of points (3, N)."""
@@ -105,10 +126,7 @@ class Signorini:
         at_t = (lambda x: phi(x, time)) if self.obstacle_moves else phi
         if self.translation is None and self.rotation is None:
             return at_t
-        d = np.zeros(3)
-        if self.translation is not None:
-            shift = np.asarray(self.translation(time), dtype=np.float64).reshape(-1)
-            d[:len(shift)] = shift
+        d = self._translation(time)
         if self.rotation is None:
             return lambda x: at_t(x - d[:, None])
         q = np.asarray(self.rotation(time), dtype=np.float64).reshape(3, 3)
@@ -495,9 +513,13 @@ class SignoriniPart:
         """The gaps at ``time`` (raises InputError where a ray loses the obstacle)."""
         if self.moving:
             self._nodes.gap = contact_gap(self.law, self._nodes, time)
-        if self.friction is not None and self.law.translation is not None:
-            self.friction.move(np.asarray(self.law.translation(time), dtype=float).ravel()
-                               - np.asarray(self.law.translation(self._time), dtype=float).ravel())
+        if self.friction is not None and (self.law.translation is not None
+                                          or self.law.rotation is not None):
+            # the obstacle's points at the nodes' places at the last step, and where they go
+            cd, bs = self._nodes, self.u.function_space.dofmap.index_map_bs
+            places = cd.points.copy()
+            places[:, :bs] += self.u.x.array[cd.nodes[:, None] * bs + np.arange(bs)]
+            self.friction.move(self.law.obstacle_motion(self._time, time, places))
 
     @property
     def last_friction(self) -> Optional[dict]:

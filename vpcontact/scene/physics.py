@@ -123,9 +123,6 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
         if t.has("force"):
             t.forbid("friction", "friction on an obstacle driven by a force is not available "
                                  "yet (give it a motion)")
-        if t.has("rotation"):
-            t.forbid("friction", "friction on a turning obstacle is not available yet (its "
-                                 "slip would need the rotation's tangential motion)")
     friction = _friction(t, dim) if t.has("friction") and not (
         kind == "signorini" and t.has("force")) else None
     if t.has("obstacle"):
