@@ -1,29 +1,31 @@
 # SPDX-License-Identifier: MIT
-"""# A scratch test of a viscoplastic plate: friction against a moving obstacle (beyond the paper)
+"""# A scratch test of a viscoplastic block: friction against a moving obstacle (beyond the paper)
 
 ## The model
-A rigid slider with a cylindrical tip (radius 0.5) is pressed 0.02 into the top of a plate
+A rigid slider with a cylindrical tip (radius 0.5) is pressed 0.02 into the top of a block
 Ω = (-1, 1) × (-0.5, 0) of Perzyna material, σ̇ = E ε(u̇) − (1/μ*) E(σ − P_K σ), over
-t ≤ 0.25 s, then dragged 0.8 to the right at that depth. Between tip and plate: Signorini's
-condition and Coulomb friction, 𝔣 = 0.2. The plate is clamped at its bottom; plane stress
-(a thin plate scratched on its edge). E = 1000, ν = 0.3, von Mises set with σ_Y = 8,
-μ* = 20. This is the bundled scene ``scratch``.
+t ≤ 0.25 s, then dragged 0.8 to the right at that depth. Between tip and block: Signorini's
+condition and Coulomb friction, 𝔣 = 0.2. The block is clamped at its bottom; plane strain
+(a long block scratched across). E = 1000, ν = 0.3, von Mises set with σ_Y = 8, μ* = 20.
+This is the bundled scene ``scratch``.
 
 ## The scheme
-The paper's Problem 2 (P1 displacements, stresses at quadrature points, implicit Euler for G)
-with the Signorini condition as a bound of SNES VI and friction nodal, in the contact frames
+The paper's Problem 2 (stresses at quadrature points, implicit Euler for G) in the mixed
+formulation — Taylor–Hood displacement and pressure, vpcontact's default where Perzyna's
+volume-keeping flow would lock P1 displacements in plane strain — with the Signorini condition
+as a bound of SNES VI on the displacement's normal unknowns and friction nodal, in the contact frames
 (``vpcontact/model/nodal_friction.py``): the VI's multiplier λ_i at each contact node sets its
 Coulomb threshold 𝔣 λ_i, a return mapping the tangential force; the slip is relative to the
 moving tip. Each step is one SNES VI solve with the exact generalised Jacobian.
 
 ## What it shows
-* ``scratch.png``: (a) the tip's forces on the plate against time, and their ratio: while the
+* ``scratch.png``: (a) the tip's forces on the block against time, and their ratio: while the
   tip slides the tangential force is exactly 𝔣 times the normal one. (In this small-deformation
   model the contact normals are those of the flat reference face, so the groove's front cannot
   push the tip back: the "ploughing" excess over 𝔣 that finite-deformation scratch tests show
   needs normals of the deformed surface.) (b) The groove: u_2 along the top at the end of the
-  indentation and at t = T — the plate flowed under the tip and keeps a groove behind it.
-  (c) Where the plate slips under the tip (contact nodes slipping, against x1 and t).
+  indentation and at t = T — the block flowed under the tip and keeps a groove behind it.
+  (c) Where the block slips under the tip (contact nodes slipping, against x1 and t).
 * What ``vpcontact run`` writes besides (XDMF series, contact.csv with the friction columns,
   reactions.csv, summary.json).
 
@@ -77,7 +79,7 @@ def _figure(out: Path, session) -> None:
     ax_r.axhline(COEFFICIENT, color="gray", lw=0.8)
     ax_r.set_ylabel("ratio")
     ax_a.axvline(PRESS, color="k", ls="--", lw=1)
-    ax_a.set(xlabel="t [s]", ylabel="force on the plate", title="(a) forces of the tip")
+    ax_a.set(xlabel="t [s]", ylabel="force on the block", title="(a) forces of the tip")
     ax_a.legend(loc="center right", fontsize=8)
     times = np.unique(rows["t"])
     for when in (times[np.argmin(np.abs(times - PRESS))], times[-1]):
@@ -87,7 +89,9 @@ def _figure(out: Path, session) -> None:
     ax_b.set(xlabel="x1", ylabel="u_2 on the top", title="(b) the groove")
     ax_b.legend(fontsize=8)
     slipping = rows["slipping"] > 0
-    pressed = rows["pressure"] < -1e-6 * np.abs(rows["pressure"]).max()  # (not round-off)
+    # in contact: on the tip (no clearance) and pressed. (The nodal pressure alone would also
+    # mark a P2 midpoint just off the tip's edge: it is the lumped pressure of its facets.)
+    pressed = (rows["pressure"] < -1e-6 * np.abs(rows["pressure"]).max()) & (rows["clearance"] <= 0)
     sticking = pressed & ~slipping
     ax_c.plot(rows["x"][slipping], rows["t"][slipping], "r.", ms=2, label="slipping")
     ax_c.plot(rows["x"][sticking], rows["t"][sticking], "b.", ms=2, label="sticking")
@@ -105,7 +109,7 @@ def _figure(out: Path, session) -> None:
 
 
 def main(argv=None) -> int:
-    return scene_demo_main(run, "A scratch test of a Perzyna plate", "output/scratch", "80 20", argv)
+    return scene_demo_main(run, "A scratch test of a Perzyna block", "output/scratch", "80 20", argv)
 
 
 if __name__ == "__main__":

@@ -122,7 +122,7 @@ def test_indentation_creep_demo(shared_tmp_path, monkeypatch):
 
 def test_scratch_demo(shared_tmp_path, monkeypatch):
     """The scratch test: while the tip slides the tangential force is 𝔣 × the normal one, the
-    plate keeps a groove behind the tip, and the contact nodes under the sliding tip slip."""
+    block keeps a groove behind the tip, and the contact nodes under the sliding tip slip."""
     monkeypatch.setenv("CI", "1")
     demo = _load("scratch")
     out = shared_tmp_path / "scratch"

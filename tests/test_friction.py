@@ -183,15 +183,86 @@ def test_friction_errors_are_located(shared_tmp_path, capsys, friction, key, mes
         assert re.search(rf"bad\.toml:\d+: {key}: .*{message}", err), err
 
 
-def test_friction_on_a_force_driven_obstacle_is_refused(shared_tmp_path, capsys):
+def _block_on_a_driven_floor(angle: float, coefficient: float):
+    """The block held by its top; under it a rigid floor pushed by a force 2t along
+    e = (sin α, cos α): into the block and, for α > 0, sideways along it. The floor's d along e
+    is an unknown of each step (force control)."""
+    comm = MPI.COMM_WORLD
+    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [16, 4])
+    tags = tag_facets(msh, {1: lambda x: np.isclose(x[1], 0.25), 2: lambda x: np.isclose(x[1], 0.0)})
+    e = np.array([np.sin(angle), np.cos(angle), 0.0])
+    floor = Signorini(2, obstacle=lambda x: x[1], max_distance=1.0,
+                      force=lambda t: 2.0 * t * e[:2], force_direction=tuple(e),
+                      friction=Friction("coulomb", coefficient=coefficient))
+    zero = lambda x, t: np.zeros(x.shape[1])  # noqa: E731
+    problem = QuasistaticProblem(msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
+                                 dirichlet=[Dirichlet(1, (zero, zero), "top")], contact=floor)
+    return problem, e[:2]
+
+
+def test_a_floor_pushed_obliquely_by_a_force_slides_with_the_coulomb_ratio():
+    """Pushed at 60° from the normal, the floor slides along the block's bottom: at every step
+    every contact node slips, the tangential force is 𝔣 × the normal one (1e-8), and the
+    floor's own equation holds with friction in it — the contact force along e is the applied
+    force, C · e = F (1e-8), so N = F/(cos α + 𝔣 sin α). (Without friction in the floor's
+    equation: C · e = 1.52 F, in 13 Newton iterations per step.) At most 6 Newton iterations
+    per step (measured 5, then 2–3)."""
+    problem, e = _block_on_a_driven_floor(np.pi / 3, 0.3)
+    comm = MPI.COMM_WORLD
+    for step in advance(problem, 1.0, StepControl(0.1)):
+        assert step.newton_iterations <= 6, step
+        _, force = problem.support_forces()
+        assert force[:2] @ e == pytest.approx(2.0 * step.time, rel=1e-8), force
+        assert force[0] == pytest.approx(0.3 * force[1], rel=1e-8), force
+        last = problem.contacts[0].friction.last
+        touching = last["lam"] > 0
+        assert comm.allreduce(bool(np.all(last["slips"][touching])), op=MPI.LAND)
+    assert force[1] == pytest.approx(2.0 / (0.5 + 0.3 * np.sqrt(3) / 2), rel=1e-8)
+
+
+def test_a_floor_pushed_almost_normally_by_a_force_carries_the_nodes_that_stick():
+    """Pushed at 10° from the normal, the floor drags the block's bottom but below the limit in
+    the middle: the nodes that stick move, between steps, as the floor's tangential motion
+    Δd sin α (d the floor's solved displacement along e), up to the stick's micro-slip
+    |Δf|/k (at most 1.1e-2 of Δd sin α, next to the slipping rim); C · e = F throughout."""
+    angle = np.pi / 18
+    problem, e = _block_on_a_driven_floor(angle, 0.3)
+    part = problem.contacts[0]
+    friction = part.friction
+    rows = part.nodes.nodes * 2  # the x components of the contact nodes
+    history = []
+    for step in advance(problem, 1.0, StepControl(0.1)):
+        _, force = problem.support_forces()
+        assert force[:2] @ e == pytest.approx(2.0 * step.time, rel=1e-8), force
+        history.append((problem.u.x.array[rows].copy(), part.displacement,
+                        friction.last["force"][:, 0].copy(), friction.last["slips"].copy(),
+                        friction.last["lam"] > 0))
+    comm = MPI.COMM_WORLD
+    checked = 0
+    for (u0, d0, f0, _, on0), (u1, d1, f1, slips, on1) in zip(history[4:], history[5:]):
+        stuck = on0 & on1 & ~slips
+        expected = (d1 - d0) * np.sin(angle)
+        micro = np.abs(f1 - f0)[stuck] / friction.stiffness[stuck]
+        assert np.all(np.abs((u1 - u0)[stuck] - expected) <= 1.01 * micro + 1e-14), (
+            (u1 - u0)[stuck], expected, micro)
+        assert np.all(micro < 0.05 * abs(expected))  # (the floor's motion is what moves them)
+        checked += comm.allreduce(int(stuck.sum()))
+    assert checked >= 20
+
+
+def test_friction_on_a_force_driven_obstacle_runs_from_a_scene(shared_tmp_path):
+    """A scene with friction on an obstacle driven by a force validates and runs (it used to be
+    refused)."""
     text = DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
         "mu = 1e-3\n", 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n'
-        'force = [0, "t"]\n').replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
-    scene = write_shared(shared_tmp_path / "sig.toml", text)
-    assert cli.main(["validate", str(scene)]) == 2
-    err = capsys.readouterr().err
-    if MPI.COMM_WORLD.rank == 0:
-        assert re.search(r"sig\.toml:\d+: contact\.friction: .*driven by a force", err), err
+        'force = ["0.5*t", "t"]\n').replace(
+        'displacement = ["0.02*max(t - 0.5, 0)", "-0.002*min(t/0.5, 1)"]',
+        'displacement = [0, 0]').replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    scene = write_shared(shared_tmp_path / "driven.toml", text)
+    assert cli.main(["validate", str(scene)]) == 0
+    out = shared_tmp_path / "driven"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    assert json.loads((out / "summary.json").read_text())
 
 
 def _signorini_block(friction, floor_motion=None, drag=0.02, drag_path=None, **discretization):

@@ -106,6 +106,12 @@ class NodalFriction:
         self.touching: Optional[np.ndarray] = None        # on the obstacle at the last step
         blocks = cd.frames.blocks
         self._frame_tangents = np.array([blocks[i][:, o] for i, o in enumerate(others)])
+        # an obstacle driven by a force moves by an unknown d along e: the tangential part of
+        # its motion at node i is τ_i · e per unit of d (see :meth:`bind`)
+        self._drive = (np.einsum("nkt,k->nt", self._frame_tangents, part._e[:bs])
+                       if getattr(part, "driven", False) else None)
+        self._drive_row: Optional[int] = None   # δ's global row in SNES's vector
+        self._d_old = 0.0                        # the obstacle's d at the last step
 
     def bind(self, scale: float, dirichlet_dofs: np.ndarray, layout) -> None:
         """The solver's displacement scale, its Dirichlet dofs (local u indices: tangential rows
@@ -120,14 +126,28 @@ class NodalFriction:
         positions = layout.field_indices()["displacement"].getIndices() - start
         self.slots = positions[self.u_slots].astype(np.int32)
         self.tangential = positions[self.u_tangential].astype(np.int32)
+        if self._drive is not None:  # δ_j: after the fields' unknowns, on the last rank
+            fields = self.comm.allreduce(len(layout.field_indices()["displacement"].getIndices())
+                                         + sum(len(v.getIndices()) for k, v in
+                                               layout.field_indices().items()
+                                               if k != "displacement"))
+            self._drive_row = fields + self.part.driven_index
+            self._d_old = self.part.displacement
         if self.touching is None:  # at the start: the nodes whose gap is closed with u = 0
             self.touching = self.part.bound_gaps() / scale <= ON_BOUND
 
     # -- the state at an iterate ------------------------------------------------------------
+    def _shift(self) -> np.ndarray:
+        """The obstacle's tangential motion at the nodes over the step (at this iterate)."""
+        if self._drive is None:
+            return self.shift
+        return self.shift + self._drive * (self.part.displacement - self._d_old)
+
     def _trial(self, x: np.ndarray):
-        slip = (x[self.tangential] - self.x_old) * self.scale - self.shift
+        shift = self._shift()
+        slip = (x[self.tangential] - self.x_old) * self.scale - shift
         if self.touching is not None:  # landing nodes: only the obstacle moves past them
-            slip = np.where(self.touching[:, None], slip, -self.shift)
+            slip = np.where(self.touching[:, None], slip, -shift)
         slip = np.where(self.free, slip, 0.0)
         return self.force_old - self.stiffness[:, None] * slip, slip
 
@@ -165,7 +185,13 @@ class NodalFriction:
         self._lam = np.where(on, np.maximum(-self.signs * values[self.slots], 0.0), 0.0)
         self._at = xs.copy()  # the iterate λ belongs to
         st = self.state(xs, self._lam)
-        values[self.tangential] -= np.where(self.free, st["force"], 0.0)
+        force = np.where(self.free, st["force"], 0.0)
+        values[self.tangential] -= force
+        if self._drive is not None:  # the obstacle feels −f: its equation along e gains Σ f·τe
+            along = self.comm.allreduce(float(np.sum(force * self._drive)), op=MPI.SUM)
+            start, end = x.getOwnershipRange()
+            if start <= self._drive_row < end:
+                values[self._drive_row - start] += along
 
     def current(self, x: PETSc.Vec) -> bool:
         """Whether λ was read at x (on every rank: collective)."""
@@ -174,44 +200,57 @@ class NodalFriction:
 
     def jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """A ← A − ∂f/∂x̃ on the tangential rows (A assembled without friction; λ of the last
-        residual, at the same iterate). Collective (assembles A)."""
+        residual, at the same iterate); with an obstacle driven by a force, also the column and
+        the row of its unknown δ (the slip depends on it, and its equation on f). Collective
+        (assembles A)."""
         xs = x.getArray(readonly=True)
         st = self.state(xs, self._lam)
         start = A.getOwnershipRange()[0]
         k = self.stiffness * self.scale  # ∂(k slip)/∂x̃
-        if self.touching is not None:  # (a node landing in this step: f does not depend on x)
-            k = np.where(self.touching, k, 0.0)
-        rows_values = []
+        landing = (np.zeros(len(k), dtype=bool) if self.touching is None else ~self.touching)
+        driven = self._drive is not None
+        entries = []  # (node, tangential slot a, global column, value of ∂b_τa/∂x̃_col)
         for i in range(len(self.slots)):
             rows = self.tangential[i]
             free = self.free[i]
             if not free.any():
                 continue
-            size = np.linalg.norm(st["trial"][i])
-            if not st["beyond"][i]:  # stick: f = trial, ∂f/∂x̃_τ = −k I
-                for r, ok in zip(rows, free):
-                    if ok:
-                        rows_values.append((start + r, start + r, k[i]))
-                continue
-            direction = st["trial"][i] / size
-            # slip: f = b t̂; ∂f/∂x̃_τ = −(b/|t|) k (I − t̂t̂ᵀ); ∂f/∂x̃ ∋ t̂ ∂b/∂x̃
             d = len(rows)
-            block = st["bound"][i] / size * k[i] * (np.eye(d) - np.outer(direction, direction))
-            for a in range(d):
-                for c in range(d):
-                    if free[a] and block[a, c] != 0.0:
-                        rows_values.append((start + rows[a], start + rows[c], block[a, c]))
-            if self.friction.type == "coulomb" and st["lam"][i] > 0:
+            size = np.linalg.norm(st["trial"][i])
+            if not st["beyond"][i]:  # stick: f = trial, ∂f/∂slip = −k I
+                block = k[i] * np.eye(d)
+                direction = None
+            else:  # slip: f = b t̂; ∂f/∂slip = −(b/|t|) k (I − t̂t̂ᵀ); ∂f/∂x̃ ∋ t̂ ∂b/∂x̃
+                direction = st["trial"][i] / size
+                block = st["bound"][i] / size * k[i] * (np.eye(d) - np.outer(direction, direction))
+            block = block * free[:, None]
+            if not landing[i]:  # (a landing node's slip does not depend on its own unknowns)
+                for a in range(d):
+                    for c in range(d):
+                        if block[a, c] != 0.0:
+                            entries.append((i, a, start + rows[c], block[a, c]))
+            if driven:  # slip = … − (τ·e) δ: ∂b_τ/∂δ̃ = −block (τ·e)
+                column = -block @ self._drive[i]
+                for a in range(d):
+                    if column[a] != 0.0:
+                        entries.append((i, a, self._drive_row, column[a]))
+            if direction is not None and self.friction.type == "coulomb" and st["lam"][i] > 0:
                 cols, values = A.getRow(start + int(self.slots[i]))
                 # −∂f/∂x̃ = −f̂ 𝔣 ∂λ/∂x̃ = f̂ 𝔣 s ∂F̃_ν/∂x̃
                 factor = self.friction.coefficient * self.signs[i]
                 for a in range(d):
                     if free[a]:
                         for col, value in zip(cols, values):
-                            rows_values.append((start + rows[a], int(col),
-                                                factor * direction[a] * value))
-        for row, col, value in rows_values:
-            A.setValue(int(row), int(col), value, addv=PETSc.InsertMode.ADD_VALUES)
+                            entries.append((i, a, int(col), factor * direction[a] * value))
+        for i, a, col, value in entries:
+            A.setValue(int(start + self.tangential[i][a]), int(col), value,
+                       addv=PETSc.InsertMode.ADD_VALUES)
+        if driven:  # b_δ gains Σ f·(τ·e): its row is −Σ (τ·e)ᵀ ∂b_τ/∂x̃
+            row = {}
+            for i, a, col, value in entries:
+                row[col] = row.get(col, 0.0) - self._drive[i][a] * value
+            for col, value in row.items():
+                A.setValue(self._drive_row, int(col), value, addv=PETSc.InsertMode.ADD_VALUES)
         A.assemble()
 
     #: What :meth:`arrays` saves of the accepted step's state (for the outputs).
@@ -234,6 +273,8 @@ class NodalFriction:
         self.x_old = np.array(arrays["friction_x_old"], dtype=float)
         if "friction_touching" in arrays:
             self.touching = np.array(arrays["friction_touching"], dtype=bool)
+        if self._drive is not None:
+            self._d_old = self.part.displacement
         self.shift[:] = 0.0
         if "friction_last_force" in arrays:
             self.last = {k: np.array(arrays[f"friction_last_{k}"]) for k in self._LAST}
@@ -254,7 +295,7 @@ class NodalFriction:
         values = x.getArray()
         pressed = self.touching if self.last is None else self.last["lam"] > 0
         held = self.free & pressed[:, None]
-        stuck = self.x_old + self.shift / self.scale
+        stuck = self.x_old + self._shift() / self.scale
         values[self.tangential] = np.where(held, stuck, values[self.tangential])
 
     def commit(self, x: np.ndarray) -> None:
@@ -264,4 +305,6 @@ class NodalFriction:
         self.force_old = np.where(self.free, st["force"], 0.0)
         self.x_old = x[self.tangential].copy()
         self.touching = self._on_bound(x)
+        if self._drive is not None:
+            self._d_old = self.part.displacement
         self.shift[:] = 0.0

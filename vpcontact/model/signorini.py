@@ -595,10 +595,6 @@ class DrivenSignoriniPart(SignoriniPart):
     driven = True
 
     def __init__(self, law: Signorini, u, facet_tags, equilibrium, name: str, exclude, rotate):
-        if law.friction is not None:
-            raise InputError("friction on an obstacle driven by a force is not available yet "
-                             "(its slip would involve its unknown displacement)",
-                             key="contact.friction")
         super().__init__(law, u, facet_tags, equilibrium, name, exclude, rotate)
         e = np.zeros(3)
         e[:len(law.force_direction)] = law.force_direction
@@ -715,6 +711,8 @@ class DrivenSignoriniPart(SignoriniPart):
     def commit(self, time: float, x=None) -> None:
         self._committed = (self._committed + [(time, self.displacement)])[-2:]
         self._nodes.gap = self._gaps_at(self.displacement)  # where the obstacle is now
+        if self.friction is not None and x is not None:
+            self.friction.commit(x)
 
     def state(self) -> dict:
         return {"committed": [list(c) for c in self._committed]}
@@ -723,6 +721,8 @@ class DrivenSignoriniPart(SignoriniPart):
         self._committed = [tuple(c) for c in state["committed"]]
         self._time = time
         self._linearize(self._committed[-1][1])
+        if self.friction is not None:
+            self.friction.restore(arrays or {})
 
     def driving_displacement(self, time: float) -> Optional[float]:
         d = self.displacement * self._e

@@ -338,7 +338,8 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
         force = spec.force
         return Signorini(tag, obstacle=phi, max_distance=spec.max_distance or 1e3,
                          force=lambda t: np.array([e.value(t) for e in force]),
-                         force_direction=_force_direction(scene, force))
+                         force_direction=_force_direction(scene, force),
+                         friction=_friction(spec.friction))
     if spec.obstacle is not None:
         phi, moves = obstacle_level_set(spec, scene.dim)
         motion = spec.motion

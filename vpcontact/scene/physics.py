@@ -120,11 +120,7 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     if kind == "signorini":
         for key in ("mu", "alpha"):
             t.forbid(key, "only for type = 'normal_compliance'")
-        if t.has("force"):
-            t.forbid("friction", "friction on an obstacle driven by a force is not available "
-                                 "yet (give it a motion)")
-    friction = _friction(t, dim) if t.has("friction") and not (
-        kind == "signorini" and t.has("force")) else None
+    friction = _friction(t, dim) if t.has("friction") else None
     if t.has("obstacle"):
         if t.has("gap"):
             t.add("gap", "give either gap or obstacle, not both")

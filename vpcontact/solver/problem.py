@@ -237,6 +237,8 @@ class QuasistaticProblem:
         if frames is not None:
             rotation = rotation_matrix(self.V, frames, self.fields)
         driven = [p for p in self.contacts if getattr(p, "driven", False)]
+        for j, part in enumerate(driven):
+            part.driven_index = j  # its unknown δ_j's place after the fields' (variables.py)
         self.variables = (None if rotation is None and not driven else
                           ChangeOfVariables(self.fields, rotation, driven, scale))
         self.solver = StepSolver(self.fields, self.bcs, self._update_stress,
