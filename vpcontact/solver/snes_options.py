@@ -24,6 +24,10 @@ DEFAULT_OPTIONS = {
     # small relative to the applied loads (0 disables the test).
     "vpcontact_force_rtol": 0.0,
     "snes_max_it": 50,
+    # Stop as diverged once this many Newton iterations in a row have left ||F|| above 10 times
+    # its best in the step (the initial residual included): the step is then cut at once
+    # instead of after snes_max_it (0: never). See StepSolver._converged.
+    "vpcontact_stagnation_its": 12,
     "ksp_type": "preonly",
     "pc_type": "lu",
     # Linear solves of SNES VI (vpcontact.solver.vi_linear): "lagged_lu" (GMRES preconditioned by kept
