@@ -742,3 +742,16 @@ def test_3d_block_dragged_diagonally_on_a_rigid_floor_slides_against_the_drag(di
     assert len(errors) >= 3
     assert np.all(np.diff(np.log(errors[:, 0])) < -1.0), errors
     assert errors[-1, 0] < 2e-4 and np.all(errors[:, 1] < 1e-3), errors
+
+
+def test_friction_in_1d_is_refused(shared_tmp_path, capsys):
+    """A bar has no tangential direction: friction on its contact is a located error (it was
+    accepted and ignored)."""
+    from vpcontact.scene.files import bundled
+    text = bundled()["normal_compliance_1d"].read_text().replace(
+        "[contact]\n", '[contact]\nfriction = { type = "coulomb", coefficient = 0.3 }\n', 1)
+    scene = write_shared(shared_tmp_path / "bar.toml", text)
+    assert cli.main(["validate", str(scene)]) == 2
+    err = capsys.readouterr().err
+    if MPI.COMM_WORLD.rank == 0:
+        assert re.search(r"bar\.toml:\d+: contact\.friction: .*1-D", err), err

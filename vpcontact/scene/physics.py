@@ -120,7 +120,9 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     if kind == "signorini":
         for key in ("mu", "alpha"):
             t.forbid(key, "only for type = 'normal_compliance'")
-    friction = _friction(t, dim) if t.has("friction") else None
+    if dim == 1 and t.has("friction"):
+        t.forbid("friction", "a 1-D body has no tangential direction to slip in")
+    friction = _friction(t, dim) if t.has("friction") and dim != 1 else None
     if t.has("obstacle"):
         if t.has("gap"):
             t.add("gap", "give either gap or obstacle, not both")
