@@ -755,3 +755,18 @@ def test_friction_in_1d_is_refused(shared_tmp_path, capsys):
     err = capsys.readouterr().err
     if MPI.COMM_WORLD.rank == 0:
         assert re.search(r"bar\.toml:\d+: contact\.friction: .*1-D", err), err
+
+
+def test_a_vi_step_stuck_at_round_off_is_accepted():
+    """The scratch scene's indentation (40×10 cells, k = 0.025): SNES VI reached ||F|| = 3.1e-11
+    where rtol ||F_0|| was 2.6e-11, and its steps, projected back onto the bounds, left the
+    iterate where it was — the same ||F|| to the last bit for 47 iterations, then a cut step
+    (twice to t = 0.2). The round-off stop now takes a residual repeated three times at round-off
+    as converged: no step is cut, and every step takes at most 8 Newton iterations."""
+    from vpcontact import scene as scenes
+    from vpcontact.scene import build
+    problem = build(scenes.load_bundled("scratch", (40, 10), 0.025)).problem
+    steps = list(advance(problem, 0.2, StepControl(0.025, max_cuts=4)))
+    assert len(steps) == 8, [s.time for s in steps]  # no step was cut
+    assert max(s.newton_iterations for s in steps) <= 8, [s.newton_iterations for s in steps]
+    assert problem.solver.total_iterations == sum(s.newton_iterations for s in steps)

@@ -209,7 +209,8 @@ class NodalFriction:
         k = self.stiffness * self.scale  # ∂(k slip)/∂x̃
         landing = (np.zeros(len(k), dtype=bool) if self.touching is None else ~self.touching)
         driven = self._drive is not None
-        entries = []  # (node, tangential slot a, global column, value of ∂b_τa/∂x̃_col)
+        # one (node, tangential slot a, global columns, values of ∂b_τa/∂x̃_col) per row piece
+        entries = []
         for i in range(len(self.slots)):
             rows = self.tangential[i]
             free = self.free[i]
@@ -224,33 +225,30 @@ class NodalFriction:
                 direction = st["trial"][i] / size
                 block = st["bound"][i] / size * k[i] * (np.eye(d) - np.outer(direction, direction))
             block = block * free[:, None]
-            if not landing[i]:  # (a landing node's slip does not depend on its own unknowns)
-                for a in range(d):
-                    for c in range(d):
-                        if block[a, c] != 0.0:
-                            entries.append((i, a, start + rows[c], block[a, c]))
-            if driven:  # slip = … − (τ·e) δ: ∂b_τ/∂δ̃ = −block (τ·e)
-                column = -block @ self._drive[i]
-                for a in range(d):
-                    if column[a] != 0.0:
-                        entries.append((i, a, self._drive_row, column[a]))
-            if direction is not None and self.friction.type == "coulomb" and st["lam"][i] > 0:
+            own = (start + rows).astype(PETSc.IntType)
+            coulomb = (direction is not None and self.friction.type == "coulomb"
+                       and st["lam"][i] > 0)
+            if coulomb:
                 cols, values = A.getRow(start + int(self.slots[i]))
                 # −∂f/∂x̃ = −f̂ 𝔣 ∂λ/∂x̃ = f̂ 𝔣 s ∂F̃_ν/∂x̃
                 factor = self.friction.coefficient * self.signs[i]
-                for a in range(d):
-                    if free[a]:
-                        for col, value in zip(cols, values):
-                            entries.append((i, a, int(col), factor * direction[a] * value))
-        for i, a, col, value in entries:
-            A.setValue(int(start + self.tangential[i][a]), int(col), value,
-                       addv=PETSc.InsertMode.ADD_VALUES)
+            for a in range(d):
+                if not free[a]:
+                    continue
+                if not landing[i]:  # (a landing node's slip does not depend on its unknowns)
+                    entries.append((i, a, own, block[a]))
+                if driven:  # slip = … − (τ·e) δ: ∂b_τ/∂δ̃ = −block (τ·e)
+                    entries.append((i, a, np.array([self._drive_row], dtype=PETSc.IntType),
+                                    np.array([-block[a] @ self._drive[i]])))
+                if coulomb:
+                    entries.append((i, a, cols, factor * direction[a] * values))
+        for i, a, cols, values in entries:
+            A.setValues(int(start + self.tangential[i][a]), cols, values,
+                        addv=PETSc.InsertMode.ADD_VALUES)
         if driven:  # b_δ gains Σ f·(τ·e): its row is −Σ (τ·e)ᵀ ∂b_τ/∂x̃
-            row = {}
-            for i, a, col, value in entries:
-                row[col] = row.get(col, 0.0) - self._drive[i][a] * value
-            for col, value in row.items():
-                A.setValue(self._drive_row, int(col), value, addv=PETSc.InsertMode.ADD_VALUES)
+            for i, a, cols, values in entries:
+                A.setValues(self._drive_row, cols, -self._drive[i][a] * values,
+                            addv=PETSc.InsertMode.ADD_VALUES)
         A.assemble()
 
     #: What :meth:`arrays` saves of the accepted step's state (for the outputs).

@@ -389,6 +389,12 @@ class StepSolver:
         saves three quarters of the wasted factorizations. Slow steps that do converge stay near
         their best meanwhile (a plane-strain Perzyna cantilever, mixed: ||F|| within 10 % of
         ||F_0|| for 20 iterations, then converged at the 41st) and are left alone.
+
+        The round-off stop also applies when ||F|| comes out the same to the last bit three
+        times in a row: the iterate no longer moves. SNES VI's step, projected back onto the
+        bounds, can leave it where it is while the step's own norm is not small: the scratch
+        demo's pressing reached 3.14e-11 (rtol × ||F_0|| = 2.56e-11) and repeated it for 47
+        iterations before the step was cut (twice in the run, 100 of its 320 iterations).
         """
         xnorm, ynorm, fnorm = norms
         rtol, atol, stol, _ = snes.getTolerances()
@@ -397,17 +403,22 @@ class StepSolver:
         if it == 0:
             self._fnorm0 = fnorm
             self._best, self._above, self.stagnated = fnorm, 0, False
+            self._repeats = 0
         else:
             self._above = self._above + 1 if fnorm > STAGNATION_FACTOR * self._best else 0
             self._best = min(self._best, fnorm)
+            self._repeats = self._repeats + 1 if fnorm == self._last_fnorm else 0
+        self._last_fnorm = fnorm
         if fnorm <= atol or fnorm <= self._force_rtol * self._force_scale:
             return _SNES_REASON.CONVERGED_FNORM_ABS
         if it == 0:
             return _SNES_REASON.ITERATING
         if fnorm <= rtol * self._fnorm0:
             return _SNES_REASON.CONVERGED_FNORM_RELATIVE
-        if ynorm <= stol * xnorm and fnorm <= self._stall_rtol * max(self._fnorm0,
-                                                                      self._round_off_scale):
+        at_round_off = fnorm <= self._stall_rtol * max(self._fnorm0, self._round_off_scale)
+        if at_round_off and (ynorm <= stol * xnorm or self._repeats >= 2):
+            # (or the same ||F||, to the last bit, three times: the iterate no longer moves —
+            # SNES VI projecting each step back onto the bounds)
             return _SNES_REASON.CONVERGED_SNORM_RELATIVE
         if self._stagnation_its and self._above >= self._stagnation_its:
             self.stagnated = True

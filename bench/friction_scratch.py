@@ -1,0 +1,84 @@
+# SPDX-License-Identifier: MIT
+"""Benchmark: what friction costs on a viscoplastic body — the scratch scene with and without it.
+
+Target (issue "Friction"): a frictional step costs at most 1.5× the frictionless step of the same
+problem. bench/friction_step.py measures it on an elastic block, where the frictionless problem
+is linear once pressed (0–2 Newton iterations per step) and any semi-smooth friction iteration
+is extra. Here the body is the bundled ``scratch`` scene's Perzyna block (plane strain, mixed
+formulation), whose frictionless steps need Newton iterations of their own: the tip pressed in
+(t ≤ 0.25) and dragged along (to t = 1), with Coulomb friction 𝔣 = 0.2 and without. Recorded:
+wall time of the run, Newton iterations (accepted steps and in all), rejected steps, per
+phase (press, drag) seconds per step, and the ratios.
+
+    .venv/bin/python bench/friction_scratch.py [--cells 80 20] [--k 0.025]
+
+writes bench/results/friction_scratch.json (and prints it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+import time
+from pathlib import Path
+
+from mpi4py import MPI
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import machine, save  # noqa: E402
+
+from vpcontact import scene as scenes  # noqa: E402
+from vpcontact.scene import build  # noqa: E402
+from vpcontact.solver import StepControl, advance  # noqa: E402
+
+PRESS = 0.25  # the end of the indentation (the scene's motion)
+
+
+def run(cells, k: float, friction: bool) -> dict:
+    scene = scenes.load_bundled("scratch", cells, k)
+    if not friction:
+        contact = dataclasses.replace(scene.contacts[0], friction=None)
+        scene = dataclasses.replace(scene, contacts=(contact,))
+    problem = build(scene).problem
+    phases = {"press": [0.0, []], "drag": [0.0, []]}
+    start = time.perf_counter()
+    for step in advance(problem, scene.time.T, StepControl(k)):
+        now = time.perf_counter()
+        phase = phases["press" if step.time <= PRESS + 1e-12 else "drag"]
+        phase[0] += now - start
+        phase[1].append(step.newton_iterations)
+        start = now
+    out = {name: {"steps": len(its), "seconds_per_step": wall / len(its),
+                  "newton_iterations_per_step": sum(its) / len(its)}
+           for name, (wall, its) in phases.items()}
+    out.update({"seconds": sum(w for w, _ in phases.values()),
+                "newton_iterations_total": problem.solver.total_iterations,
+                "dofs": problem.solver.unknowns, "formulation": problem.formulation})
+    return out
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cells", type=int, nargs=2, default=[80, 20])
+    parser.add_argument("--k", type=float, default=0.025)
+    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "friction_scratch.json"))
+    args = parser.parse_args(argv)
+    comm = MPI.COMM_WORLD
+    run((8, 2), 0.25, True)  # warm-up: JIT of the forms
+    run((8, 2), 0.25, False)
+    frictionless = run(tuple(args.cells), args.k, False)
+    coulomb = run(tuple(args.cells), args.k, True)
+    result = {"benchmark": "friction_scratch", "machine": machine(comm), "cells": args.cells,
+              "k": args.k, "frictionless": frictionless, "coulomb": coulomb,
+              "cost_ratio": {"run": coulomb["seconds"] / frictionless["seconds"],
+                             **{phase: coulomb[phase]["seconds_per_step"]
+                                / frictionless[phase]["seconds_per_step"]
+                                for phase in ("press", "drag")}},
+              "target_cost_ratio": 1.5}
+    save(result, args.out, comm)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
