@@ -516,9 +516,9 @@ def test_contact_csv_holds_the_friction_state(shared_tmp_path):
         assert np.allclose(np.cumsum(node[:, col["slip_increment"]]), node[:, col["slip"]])
 
 
-def test_3d_block_dragged_diagonally_slides_against_the_drag():
-    """3-D: the Coulomb cone is isotropic — a block dragged along (1, 2, 0)/√5 over the
-    foundation z = 0 feels a tangential force 𝔣 × the normal one, along −(1, 2, 0)/√5."""
+def _dragged_diagonally_3d(contact, **discretization):
+    """A 3-D elastic block [0, 1]² × [0, 0.25] pressed by its top onto the plane z = 0 (``contact``
+    on its bottom) over t ≤ 0.5, then dragged along e = (1, 2, 0)/√5; returns (problem, e)."""
     comm = MPI.COMM_WORLD
     msh = dmesh.create_box(comm, [np.zeros(3), np.array([1.0, 1.0, 0.25])], [4, 4, 2])
     tags = tag_facets(msh, {1: lambda x: np.isclose(x[2], 0.25), 2: lambda x: np.isclose(x[2], 0.0)})
@@ -532,8 +532,16 @@ def test_3d_block_dragged_diagonally_slides_against_the_drag():
 
     problem = QuasistaticProblem(
         msh, tags, Elastic(Elasticity("3d_standard", 1e3, 0.3)),
-        dirichlet=[Dirichlet(1, (drag(0), drag(1), press), "top")],
-        contact=NormalCompliance(2, mu=1e-3, friction=Friction("coulomb", coefficient=0.4)))
+        dirichlet=[Dirichlet(1, (drag(0), drag(1), press), "top")], contact=contact,
+        **discretization)
+    return problem, e
+
+
+def test_3d_block_dragged_diagonally_slides_against_the_drag():
+    """3-D: the Coulomb cone is isotropic — a block dragged along (1, 2, 0)/√5 over the
+    foundation z = 0 feels a tangential force 𝔣 × the normal one, along −(1, 2, 0)/√5."""
+    problem, e = _dragged_diagonally_3d(
+        NormalCompliance(2, mu=1e-3, friction=Friction("coulomb", coefficient=0.4)))
     errors = []
     for step in advance(problem, 1.0, StepControl(0.1)):
         if step.time >= 0.6 - 1e-9:
@@ -707,22 +715,9 @@ def test_3d_block_dragged_diagonally_on_a_rigid_floor_slides_against_the_drag(di
     force tends to 𝔣 × the normal one along −(1, 2, 0)/√5 (below); at most 8 Newton iterations
     per step (measured 5–6)."""
     comm = MPI.COMM_WORLD
-    msh = dmesh.create_box(comm, [np.zeros(3), np.array([1.0, 1.0, 0.25])], [4, 4, 2])
-    tags = tag_facets(msh, {1: lambda x: np.isclose(x[2], 0.25), 2: lambda x: np.isclose(x[2], 0.0)})
-    e = np.array([1.0, 2.0]) / np.sqrt(5.0)
-
-    def drag(i):
-        return lambda x, t: np.full(x.shape[1], 0.02 * e[i] * max(t - 0.5, 0.0))
-
-    def press(x, t):
-        return np.full(x.shape[1], -0.002 * min(t / 0.5, 1.0))
-
     floor = Signorini(2, obstacle=lambda x: x[2], max_distance=1.0,
                       friction=Friction("coulomb", coefficient=0.4))
-    problem = QuasistaticProblem(
-        msh, tags, Elastic(Elasticity("3d_standard", 1e3, 0.3)),
-        dirichlet=[Dirichlet(1, (drag(0), drag(1), press), "top")], contact=floor,
-        **discretization)
+    problem, e = _dragged_diagonally_3d(floor, **discretization)
     errors = []
     for step in advance(problem, 1.0, StepControl(0.1)):
         assert step.newton_iterations <= 8, step
