@@ -67,6 +67,17 @@ figures = false
 """
 
 
+#: The foundation of DRAGGED as a rigid plane (a Signorini part's obstacle).
+PLANE_FLOOR = 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n'
+
+
+def _signorini_dragged(obstacle: str) -> str:
+    """DRAGGED with a rigid obstacle (the ``obstacle`` lines, with any motion or force) in place
+    of the compliant foundation, and Coulomb friction 𝔣 = 0.3."""
+    return DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
+        "mu = 1e-3\n", obstacle).replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+
+
 def _forces(out):
     lines = (out / "reactions.csv").read_text().splitlines()
     header = lines[0].split(",")
@@ -253,11 +264,8 @@ def test_a_floor_pushed_almost_normally_by_a_force_carries_the_nodes_that_stick(
 def test_friction_on_a_force_driven_obstacle_runs_from_a_scene(shared_tmp_path):
     """A scene with friction on an obstacle driven by a force validates and runs (it used to be
     refused)."""
-    text = DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
-        "mu = 1e-3\n", 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n'
-        'force = ["0.5*t", "t"]\n').replace(
-        'displacement = ["0.02*max(t - 0.5, 0)", "-0.002*min(t/0.5, 1)"]',
-        'displacement = [0, 0]').replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    text = _signorini_dragged(PLANE_FLOOR + 'force = ["0.5*t", "t"]\n').replace(
+        'displacement = ["0.02*max(t - 0.5, 0)", "-0.002*min(t/0.5, 1)"]', 'displacement = [0, 0]')
     scene = write_shared(shared_tmp_path / "driven.toml", text)
     assert cli.main(["validate", str(scene)]) == 0
     out = shared_tmp_path / "driven"
@@ -560,9 +568,7 @@ def test_3d_block_dragged_diagonally_slides_against_the_drag():
 
 
 def test_contact_csv_holds_a_signorini_part_s_friction(shared_tmp_path):
-    text = DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
-        "mu = 1e-3\n", 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n').replace(
-        "FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    text = _signorini_dragged(PLANE_FLOOR)
     scene = write_shared(shared_tmp_path / "sig.toml", text)
     out = shared_tmp_path / "sig"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
@@ -666,10 +672,7 @@ def test_a_block_stuck_on_a_turning_roller_moves_with_its_surface():
 
 def test_friction_on_a_turning_obstacle_runs_from_a_scene(shared_tmp_path):
     """A scene with friction on a turning obstacle validates and runs (it used to be refused)."""
-    text = DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
-        "mu = 1e-3\n", 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n'
-        'rotation = { center = [0.5, -10], angle = "1e-4*t" }\n').replace(
-        "FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    text = _signorini_dragged(PLANE_FLOOR + 'rotation = { center = [0.5, -10], angle = "1e-4*t" }\n')
     scene = write_shared(shared_tmp_path / "turn.toml", text)
     assert cli.main(["validate", str(scene)]) == 0
     out = shared_tmp_path / "turn"
@@ -696,9 +699,7 @@ def test_a_floor_sliding_from_the_start_drags_the_block_it_is_pressed_onto():
 def test_friction_on_a_deforming_obstacle_is_refused(shared_tmp_path, capsys):
     """An obstacle given as a level set of x and t has no material points for the body to slip
     against: refused with a located error, exit 2, nothing written."""
-    text = DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
-        "mu = 1e-3\n", 'obstacle = "x[1] + 1e-3*t"\n').replace(
-        "FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    text = _signorini_dragged('obstacle = "x[1] + 1e-3*t"\n')
     scene = write_shared(shared_tmp_path / "deform.toml", text)
     out = shared_tmp_path / "deform"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 2

@@ -103,12 +103,12 @@ class NodalFriction:
         self._lam = np.zeros(len(self.slots))            # λ at the last residual
         self._at: Optional[np.ndarray] = None             # ... and its iterate
         self.last: Optional[dict] = None                  # the accepted step's state
-        self.touching: Optional[np.ndarray] = None        # on the obstacle at the last step
+        self.touching: Optional[np.ndarray] = None        # on the obstacle (bind, commit)
         blocks = cd.frames.blocks
         self._frame_tangents = np.array([blocks[i][:, o] for i, o in enumerate(others)])
         # an obstacle driven by a force moves by an unknown d along e: the tangential part of
         # its motion at node i is τ_i · e per unit of d (see :meth:`bind`)
-        self._drive = (np.einsum("nkt,k->nt", self._frame_tangents, part._e[:bs])
+        self._drive = (np.einsum("nkt,k->nt", self._frame_tangents, part.direction[:bs])
                        if getattr(part, "driven", False) else None)
         self._drive_row: Optional[int] = None   # δ's global row in SNES's vector
         self._d_old = 0.0                        # the obstacle's d at the last step
@@ -121,16 +121,12 @@ class NodalFriction:
         self.scale = scale
         self.free = ~np.isin(self.u_tangential, dirichlet_dofs)
         probe = layout.create_vector()
-        start = probe.getOwnershipRange()[0]
+        start, fields = probe.getOwnershipRange()[0], probe.getSize()
         probe.destroy()
         positions = layout.field_indices()["displacement"].getIndices() - start
         self.slots = positions[self.u_slots].astype(np.int32)
         self.tangential = positions[self.u_tangential].astype(np.int32)
-        if self._drive is not None:  # δ_j: after the fields' unknowns, on the last rank
-            fields = self.comm.allreduce(len(layout.field_indices()["displacement"].getIndices())
-                                         + sum(len(v.getIndices()) for k, v in
-                                               layout.field_indices().items()
-                                               if k != "displacement"))
+        if self._drive is not None:  # δ_j: after all the fields' unknowns, on the last rank
             self._drive_row = fields + self.part.driven_index
             self._d_old = self.part.displacement
         if self.touching is None:  # at the start: the nodes whose gap is closed with u = 0
@@ -146,8 +142,7 @@ class NodalFriction:
     def _trial(self, x: np.ndarray):
         shift = self._shift()
         slip = (x[self.tangential] - self.x_old) * self.scale - shift
-        if self.touching is not None:  # landing nodes: only the obstacle moves past them
-            slip = np.where(self.touching[:, None], slip, -shift)
+        slip = np.where(self.touching[:, None], slip, -shift)  # landing: the obstacle moves past
         slip = np.where(self.free, slip, 0.0)
         return self.force_old - self.stiffness[:, None] * slip, slip
 
@@ -207,7 +202,7 @@ class NodalFriction:
         st = self.state(xs, self._lam)
         start = A.getOwnershipRange()[0]
         k = self.stiffness * self.scale  # ∂(k slip)/∂x̃
-        landing = (np.zeros(len(k), dtype=bool) if self.touching is None else ~self.touching)
+        landing = ~self.touching
         driven = self._drive is not None
         # one (node, tangential slot a, global columns, values of ∂b_τa/∂x̃_col) per row piece
         entries = []
@@ -288,8 +283,6 @@ class NodalFriction:
         first step sticks the nodes touching at the start: a floor sliding from t = 0 under a
         block pressed onto it had every node's bound 𝔣λ near zero and Newton slipping either way
         in turn (no convergence at any step size)."""
-        if self.last is None and self.touching is None:
-            return
         values = x.getArray()
         pressed = self.touching if self.last is None else self.last["lam"] > 0
         held = self.free & pressed[:, None]

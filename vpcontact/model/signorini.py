@@ -613,6 +613,11 @@ class DrivenSignoriniPart(SignoriniPart):
         self._linearize(self._predicted)
 
     @property
+    def direction(self) -> np.ndarray:
+        """e, the unit vector the obstacle moves along (3 components)."""
+        return self._e
+
+    @property
     def displacement(self) -> float:
         """d = d_p + δ at the current iterate."""
         return self._predicted + self.increment

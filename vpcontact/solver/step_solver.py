@@ -580,7 +580,7 @@ class StepSolver:
             ksp_reason = snes.getKSP().getConvergedReason()
             detail = f"last linear solve reason {ksp_reason}" if ksp_reason < 0 else ""
             name = reason_name(reason)
-            if getattr(self, "stagnated", False) and reason == _SNES_REASON.DIVERGED_DTOL:
+            if self.stagnated and reason == _SNES_REASON.DIVERGED_DTOL:
                 name = (f"stagnated ({self._stagnation_its} iterations with a residual above "
                         f"{STAGNATION_FACTOR:g} × its best, {self._best:.3g})")
             raise ConvergenceError(name, its, time, step, detail)
