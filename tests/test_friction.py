@@ -399,8 +399,8 @@ def test_signorini_sticks_below_the_limit_with_the_mixed_formulation():
 def test_a_restored_checkpoint_keeps_the_stick_forces():
     """The block dragged until it slides, then pulled back a little: its nodes stick again with
     forces that depend on the history (the return mapping's f_{n−1}). A run restored from a
-    checkpoint taken then ends where an uninterrupted one does. (Tresca: with
-    Coulomb, Newton cycles on this reversal; see the README's friction section.)"""
+    checkpoint taken then ends where an uninterrupted one does (Tresca; Coulomb's reversal:
+    the next test)."""
     friction = Friction("tresca", threshold=2.0)
 
     def path(t):  # forward to t = 0.8, then back by 1e-5 (the block unloads elastically)
@@ -419,6 +419,28 @@ def test_a_restored_checkpoint_keeps_the_stick_forces():
     expected = first.support_forces()[1]
     assert abs(expected[0]) < 2.0 * (1 - 1e-3)  # below the slip force: sticking again
     assert np.allclose(second.support_forces()[1], expected, rtol=1e-9, atol=0.0)
+
+
+@pytest.mark.parametrize("back", [1e-5, 1e-4, 1e-3])
+def test_a_reversed_drag_sticks_again_within_six_newton_iterations(back):
+    """Coulomb: the block dragged until it slides, then pulled back by ``back`` within one step:
+    every node sticks again, in at most 6 Newton iterations, with no step cut. (The nodes
+    start the step on the cone's edge with no slip yet; linearised there on the slip branch,
+    whose 2-D tangent is zero, Newton jumped them across the stick interval and cycled: 8, 29
+    and 23 iterations for these pull-backs.)"""
+    def path(t):
+        return 0.02 * max(min(t, 0.8) - 0.5, 0.0) - back * max(t - 0.8, 0.0) / 0.2
+
+    problem = _signorini_block(Friction("coulomb", coefficient=0.3), drag_path=path)
+    friction, comm = problem.contacts[0].friction, MPI.COMM_WORLD
+    its = []
+    for step in advance(problem, 1.0, StepControl(0.1)):
+        its.append(step.newton_iterations)
+        if abs(step.time - 0.8) < 1e-9:  # sliding before the reversal
+            assert comm.allreduce(int(friction.last["slips"].sum()), op=MPI.SUM) > 10
+    assert len(its) == 10 and problem.solver.total_iterations == sum(its), its  # no step cut
+    assert max(its) <= 6, its
+    assert not comm.allreduce(bool(friction.last["slips"].any()), op=MPI.LOR)
 
 
 def _turned_block(friction, angle: float):

@@ -33,6 +33,16 @@ it landed. A slider's tip sweeping over the nodes ahead of it drags them with it
 force; a cylinder pressed straight into a block gives its landing nodes none (measured there:
 19 Newton iterations instead of 24 and a step cut, README).
 
+Reversals: the step's initial guess sticks (:meth:`NodalFriction.predict`), so a node that slid
+in the last step starts on the cone's edge with no slip yet. Its return mapping then says slip,
+whose 2-D tangent is zero: Newton is free to move the node any distance along the face. Where
+the load turns back, the node should stick, and Newton instead jumped it across the stick
+interval (2b/k wide) and cycled between slipping forward and back (a dragged block pulled back
+by 1e−5 / 1e−4 / 1e−3 within a step: 8 / 29 / 23 iterations). So at the initial guess a node is
+linearised on the stick branch — unless the obstacle moves along it in the step (a slider
+sweeping past: there the slip branch is the right first guess, and the stick one cost the
+scratch demo 0.8 iterations per dragging step). The reversals now take 3 / 2 / 2.
+
 Any Lagrange degree and either field layout (:mod:`vpcontact.model.fields`): Coulomb's threshold
 𝔣 λ_i needs no area, and friction acts on the displacement unknowns only, found in SNES's vector
 through the layout's ``field_indices()`` (the pressure unknowns of the mixed formulation get no
@@ -102,6 +112,7 @@ class NodalFriction:
         self.shift = np.zeros(self.tangential.shape)      # the obstacle's tangential motion
         self._lam = np.zeros(len(self.slots))            # λ at the last residual
         self._at: Optional[np.ndarray] = None             # ... and its iterate
+        self._predicted: Optional[np.ndarray] = None     # the step's initial guess (x̃_τ)
         self.last: Optional[dict] = None                  # the accepted step's state
         self.touching: Optional[np.ndarray] = None        # on the obstacle (bind, commit)
         blocks = cd.frames.blocks
@@ -203,6 +214,11 @@ class NodalFriction:
         start = A.getOwnershipRange()[0]
         k = self.stiffness * self.scale  # ∂(k slip)/∂x̃
         landing = ~self.touching
+        # at the step's initial guess, a node the obstacle does not move along is linearised on
+        # the stick branch (see the module docstring: reversals)
+        holds = (np.all(xs[self.tangential] == self._predicted, axis=1)
+                 & ~np.any(self._shift(), axis=1)
+                 if self._predicted is not None else np.zeros(len(self.slots), dtype=bool))
         driven = self._drive is not None
         # one (node, tangential slot a, global columns, values of ∂b_τa/∂x̃_col) per row piece
         entries = []
@@ -213,7 +229,7 @@ class NodalFriction:
                 continue
             d = len(rows)
             size = np.linalg.norm(st["trial"][i])
-            if not st["beyond"][i]:  # stick: f = trial, ∂f/∂slip = −k I
+            if not st["beyond"][i] or holds[i]:  # stick: f = trial, ∂f/∂slip = −k I
                 block = k[i] * np.eye(d)
                 direction = None
             else:  # slip: f = b t̂; ∂f/∂slip = −(b/|t|) k (I − t̂t̂ᵀ); ∂f/∂x̃ ∋ t̂ ∂b/∂x̃
@@ -288,6 +304,7 @@ class NodalFriction:
         held = self.free & pressed[:, None]
         stuck = self.x_old + self._shift() / self.scale
         values[self.tangential] = np.where(held, stuck, values[self.tangential])
+        self._predicted = values[self.tangential].copy()
 
     def commit(self, x: np.ndarray) -> None:
         """The step is accepted at x (SNES units; λ of the last residual, evaluated there)."""
