@@ -38,7 +38,6 @@ from __future__ import annotations
 import math
 from typing import Optional, Protocol
 
-import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc

@@ -21,9 +21,9 @@ from vpcontact.scene.schema import (REQUIRED, Report, Table, at_least, between, 
 from vpcontact.linear_solvers import LINEAR_SOLVERS
 from vpcontact.model.locking import FORMULATIONS, locking_expected
 from vpcontact.scene.specs import (BUILTIN_MESHES, CELL_TYPES, DIAGONALS, BoundaryPart,
-                                   BoxSelector, ContactSpec, InitialSpec, LoadSpec, MaterialSpec,
-                                   MeshSpec, OutputSpec, PlaneSelector, PointLoad, SolverSpec,
-                                   TIME_SCHEMES, TimeSpec)
+                                   BoxSelector, ContactSpec, InitialSpec, LawSpec, LoadSpec,
+                                   MaterialSpec, MeshSpec, OutputSpec, PlaneSelector, PointLoad,
+                                   SolverSpec, TIME_SCHEMES, TimeSpec)
 
 __all__ = ["TOP_KEYS", "read_scene"]
 
