@@ -112,7 +112,7 @@ class NodalFriction:
         self.shift = np.zeros(self.tangential.shape)      # the obstacle's tangential motion
         self._lam = np.zeros(len(self.slots))            # λ at the last residual
         self._at: Optional[np.ndarray] = None             # ... and its iterate
-        self._predicted: Optional[np.ndarray] = None     # the step's initial guess (x̃_τ)
+        self._predicted = np.full(self.tangential.shape, np.nan)  # the step's initial x̃_τ
         self.last: Optional[dict] = None                  # the accepted step's state
         self.touching: Optional[np.ndarray] = None        # on the obstacle (bind, commit)
         blocks = cd.frames.blocks
@@ -217,8 +217,7 @@ class NodalFriction:
         # at the step's initial guess, a node the obstacle does not move along is linearised on
         # the stick branch (see the module docstring: reversals)
         holds = (np.all(xs[self.tangential] == self._predicted, axis=1)
-                 & ~np.any(self._shift(), axis=1)
-                 if self._predicted is not None else np.zeros(len(self.slots), dtype=bool))
+                 & ~np.any(self._shift(), axis=1))
         driven = self._drive is not None
         # one (node, tangential slot a, global columns, values of ∂b_τa/∂x̃_col) per row piece
         entries = []
