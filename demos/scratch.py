@@ -5,8 +5,9 @@
 A rigid slider with a cylindrical tip (radius 0.5) is pressed 0.02 into the top of a block
 Ω = (-1, 1) × (-0.5, 0) of Perzyna material, σ̇ = E ε(u̇) − (1/μ*) E(σ − P_K σ), over
 t ≤ 0.25 s, then dragged 0.8 to the right at that depth. Between tip and block: Signorini's
-condition and Coulomb friction, 𝔣 = 0.2. The block is clamped at its bottom; plane strain
-(a long block scratched across). E = 1000, ν = 0.3, von Mises set with σ_Y = 8, μ* = 20.
+condition and Coulomb friction, 𝔣 = 0.2; the contact force acts along the tip's normal
+(``normals = "obstacle"``). The block is clamped at its bottom; plane strain (a long block
+scratched across). E = 1000, ν = 0.3, von Mises set with σ_Y = 8, μ* = 20.
 This is the bundled scene ``scratch``.
 
 ## The scheme
@@ -16,14 +17,18 @@ volume-keeping flow would lock P1 displacements in plane strain — with the Sig
 as a bound of SNES VI on the displacement's normal unknowns and friction nodal, in the contact frames
 (``vpcontact/model/nodal_friction.py``): the VI's multiplier λ_i at each contact node sets its
 Coulomb threshold 𝔣 λ_i, a return mapping the tangential force; the slip is relative to the
-moving tip. Each step is one SNES VI solve with the exact generalised Jacobian.
+moving tip. The bound is along the block's normal (the paper's u_ν ≤ g, the gap measured along
+it), but its force λ_i acts along the tip's normal where the node's ray meets the tip
+(``vpcontact/model/obstacle_normals.py``): on the tip's flank it has a tangential part λ_i s_i,
+s_i the flank's slope. Each step is one SNES VI solve with the exact generalised Jacobian.
 
 ## What it shows
 * ``scratch.png``: (a) the tip's forces on the block against time, and their ratio: while the
-  tip slides the tangential force is exactly 𝔣 times the normal one. (In this small-deformation
-  model the contact normals are those of the flat reference face, so the groove's front cannot
-  push the tip back: the "ploughing" excess over 𝔣 that finite-deformation scratch tests show
-  needs normals of the deformed surface.) (b) The groove: u_2 along the top at the end of the
+  tip slides the tangential force is 𝔣 times the normal one plus the ploughing of the groove's
+  front: the block flowed away under the tip and does not spring back behind it, so the tip
+  bears on its leading flank, whose normal leans against the motion. The ratio rises from 0.275
+  to about 0.29 while the front builds up (𝔣 = 0.2; with ``normals = "body"``, the paper's
+  condition, it is 𝔣 to 1e−8: the force on a flat face is normal to it). (b) The groove: u_2 along the top at the end of the
   indentation and at t = T — the block flowed under the tip and keeps a groove behind it.
   (c) Where the block slips under the tip (contact nodes slipping, against x1 and t).
 * What ``vpcontact run`` writes besides (XDMF series, contact.csv with the friction columns,

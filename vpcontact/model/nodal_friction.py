@@ -66,14 +66,10 @@ from petsc4py import PETSc
 
 from vpcontact.model.friction import STICK_STIFFNESS, return_mapping
 from vpcontact.model.nodal_areas import lumped_areas, nodal_facet_sizes
+from vpcontact.model.nodal_terms import ON_BOUND, NodalTerm
 
 
-#: A node is on its bound (in contact) within this distance of it in SNES's units (SNES VI's
-#: own tolerance for an active bound).
-ON_BOUND = 1e-8
-
-
-class NodalFriction:
+class NodalFriction(NodalTerm):
     """The friction of one Signorini part, as nodal terms of the step's SNES residual and
     Jacobian (see the module docstring).
 
@@ -87,58 +83,32 @@ class NodalFriction:
     """
 
     def __init__(self, part, shear_modulus: float, facet_tags):
+        super().__init__(part)
         V = part.u.function_space
         cd = part.nodes
-        if cd.frames is None:
-            raise ValueError("friction on a Signorini part needs its nodes in frames")
-        self.part = part
         self.friction = part.law.friction
-        mesh = V.mesh
-        self.bs = bs = V.dofmap.index_map_bs
-        self.comm = mesh.comm
         self.areas = lumped_areas(V, facet_tags, part.law.tag, cd.nodes)
         self.sizes = nodal_facet_sizes(V, facet_tags, part.law.tag, cd.nodes)
         self.stiffness = STICK_STIFFNESS * shear_modulus / self.sizes * self.areas
-        self.u_slots = cd.dofs                     # the normal unknown of each node
-        self.signs = cd.signs
-        others = [np.array([k for k in range(bs) if k != s]) for s in cd.frames.slots]
-        self.u_tangential = np.array([cd.nodes[i] * bs + o for i, o in enumerate(others)],
-                                     dtype=np.int32).reshape(len(cd.nodes), bs - 1)
-        self.slots, self.tangential = self.u_slots, self.u_tangential  # (u alone, until bind)
-        self.free = np.ones(self.tangential.shape, dtype=bool)  # tangential rows not prescribed
-        self.scale = 1.0
         self.force_old = np.zeros(self.tangential.shape)  # f_{n−1}
         self.x_old = np.zeros(self.tangential.shape)      # x̃_τ at the last step (SNES units)
         self.shift = np.zeros(self.tangential.shape)      # the obstacle's tangential motion
-        self._lam = np.zeros(len(self.slots))            # λ at the last residual
-        self._at: Optional[np.ndarray] = None             # ... and its iterate
         self._predicted = np.full(self.tangential.shape, np.nan)  # the step's initial x̃_τ
         self.last: Optional[dict] = None                  # the accepted step's state
         self.touching: Optional[np.ndarray] = None        # on the obstacle (bind, commit)
-        blocks = cd.frames.blocks
-        self._frame_tangents = np.array([blocks[i][:, o] for i, o in enumerate(others)])
+        self._frame_tangents = self.frame_tangents
         # an obstacle driven by a force moves by an unknown d along e: the tangential part of
         # its motion at node i is τ_i · e per unit of d (see :meth:`bind`)
-        self._drive = (np.einsum("nkt,k->nt", self._frame_tangents, part.direction[:bs])
+        self._drive = (np.einsum("nkt,k->nt", self._frame_tangents, part.direction[:self.bs])
                        if getattr(part, "driven", False) else None)
         self._drive_row: Optional[int] = None   # δ's global row in SNES's vector
         self._d_old = 0.0                        # the obstacle's d at the last step
 
     def bind(self, scale: float, dirichlet_dofs: np.ndarray, layout) -> None:
-        """The solver's displacement scale, its Dirichlet dofs (local u indices: tangential rows
-        they hold get no friction) and the field layout, whose ``field_indices()`` place u's
-        dofs in SNES's vector (frames and force-driven unknowns keep the layout's numbering,
-        :mod:`vpcontact.solver.variables`). Collective."""
-        self.scale = scale
-        self.free = ~np.isin(self.u_tangential, dirichlet_dofs)
-        probe = layout.create_vector()
-        start, fields = probe.getOwnershipRange()[0], probe.getSize()
-        probe.destroy()
-        positions = layout.field_indices()["displacement"].getIndices() - start
-        self.slots = positions[self.u_slots].astype(np.int32)
-        self.tangential = positions[self.u_tangential].astype(np.int32)
+        """See :meth:`NodalTerm.bind`; also the row of a force-driven obstacle's unknown."""
+        super().bind(scale, dirichlet_dofs, layout)
         if self._drive is not None:  # δ_j: after all the fields' unknowns, on the last rank
-            self._drive_row = fields + self.part.driven_index
+            self._drive_row = self.num_fields + self.part.driven_index
             self._d_old = self.part.displacement
         if self.touching is None:  # at the start: the nodes whose gap is closed with u = 0
             self.touching = self.part.bound_gaps() / scale <= ON_BOUND
@@ -180,17 +150,11 @@ class NodalFriction:
                 & (lam > 1e-8 * max(float(lam.max(initial=0.0)), np.finfo(float).tiny))}
 
     # -- hooks of the step solver --------------------------------------------------------------
-    def _on_bound(self, xs: np.ndarray) -> np.ndarray:
-        return self.signs * xs[self.slots] >= self.part.bound_gaps() / self.scale - ON_BOUND
-
     def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """b ← b − f on the tangential rows (λ read off b first: −s F̃_ν where positive, at
         nodes on their bound; 0 off it — see the module docstring)."""
         xs, values = x.getArray(readonly=True), b.getArray()
-        on = self._on_bound(xs)
-        self._lam = np.where(on, np.maximum(-self.signs * values[self.slots], 0.0), 0.0)
-        self._at = xs.copy()  # the iterate λ belongs to
-        st = self.state(xs, self._lam)
+        st = self.state(xs, self.read_multipliers(xs, values))
         force = np.where(self.free, st["force"], 0.0)
         values[self.tangential] -= force
         if self._drive is not None:  # the obstacle feels −f: its equation along e gains Σ f·τe
@@ -198,11 +162,6 @@ class NodalFriction:
             start, end = x.getOwnershipRange()
             if start <= self._drive_row < end:
                 values[self._drive_row - start] += along
-
-    def current(self, x: PETSc.Vec) -> bool:
-        """Whether λ was read at x (on every rank: collective)."""
-        here = self._at is not None and np.array_equal(self._at, x.getArray(readonly=True))
-        return self.comm.allreduce(here, op=MPI.LAND)
 
     def jacobian(self, x: PETSc.Vec, A: PETSc.Mat) -> None:
         """A ← A − ∂f/∂x̃ on the tangential rows (A assembled without friction; λ of the last
@@ -239,7 +198,7 @@ class NodalFriction:
             coulomb = (direction is not None and self.friction.type == "coulomb"
                        and st["lam"][i] > 0)
             if coulomb:
-                cols, values = A.getRow(start + int(self.slots[i]))
+                cols, values = self.normal_row(A, i)
                 # −∂f/∂x̃ = −f̂ 𝔣 ∂λ/∂x̃ = f̂ 𝔣 s ∂F̃_ν/∂x̃
                 factor = self.friction.coefficient * self.signs[i]
             for a in range(d):
@@ -311,7 +270,7 @@ class NodalFriction:
         self.last = st
         self.force_old = np.where(self.free, st["force"], 0.0)
         self.x_old = x[self.tangential].copy()
-        self.touching = self._on_bound(x)
+        self.touching = self.on_bound(x)
         if self._drive is not None:
             self._d_old = self.part.displacement
         self.shift[:] = 0.0

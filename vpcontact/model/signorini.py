@@ -56,6 +56,10 @@ class Signorini:
         force_direction: e, the unit vector F(t) keeps (3 coordinates).
         friction: Coulomb or Tresca friction (:class:`~vpcontact.model.friction.Friction`; see
             :mod:`vpcontact.model.nodal_friction`), or None.
+        normals: the direction of the contact force: ``"body"``, the body's outward normal (the
+            paper's condition), or ``"obstacle"``, the obstacle's normal where each node's ray
+            meets it (:mod:`vpcontact.model.obstacle_normals`; ploughing); the bound is u_ν ≤ g
+            either way.
     """
 
     tag: int
@@ -69,11 +73,23 @@ class Signorini:
     force: Optional[Callable[[float], np.ndarray]] = None
     force_direction: Optional[tuple[float, float, float]] = None
     friction: Optional[object] = None
+    normals: str = "body"
 
     def __post_init__(self):
         if isinstance(self.gap, (int, float)) and not (math.isfinite(self.gap) and self.gap >= 0):
             raise InputError(f"Signorini gap g must be finite and >= 0, got {self.gap}",
                              key="contact.gap")
+        if self.normals not in ("body", "obstacle"):
+            raise InputError(f"normals must be \"body\" or \"obstacle\", got {self.normals!r}",
+                             key="contact.normals")
+        if self.normals == "obstacle" and self.obstacle is None:
+            raise InputError("normals = \"obstacle\" needs an obstacle (a shape or a level set): "
+                             "a gap g alone has no surface to take normals from",
+                             key="contact.normals")
+        if self.normals == "obstacle" and self.force is not None:
+            raise InputError("normals = \"obstacle\" is not available on an obstacle driven by a "
+                             "force (its equation balances the forces along the body's normals "
+                             "only): give it a motion instead", key="contact.normals")
 
     @property
     def moving(self) -> bool:
@@ -88,8 +104,8 @@ class Signorini:
         """This condition on the mesh of ``u``: a :class:`~vpcontact.model.contact.ContactPart`
         (see :class:`SignoriniPart`)."""
         kind = SignoriniPart if self.force is None else DrivenSignoriniPart
-        part = kind(self, u, facet_tags, equilibrium, name, exclude,
-                    True if self.friction is not None else rotate)
+        framed = self.friction is not None or self.normals == "obstacle"
+        part = kind(self, u, facet_tags, equilibrium, name, exclude, True if framed else rotate)
         if self.friction is not None:
             from vpcontact.model.nodal_friction import NodalFriction
             if self.obstacle_moves:
@@ -98,6 +114,9 @@ class Signorini:
                                  "against (give it a translation and a rotation instead)",
                                  key="contact.friction")
             part.friction = NodalFriction(part, shear_modulus, facet_tags)
+        if self.normals == "obstacle":
+            from vpcontact.model.obstacle_normals import ObstacleNormalForce
+            part.obstacle_normals = ObstacleNormalForce(part)
         return part
 
     def _translation(self, time: float) -> np.ndarray:
@@ -474,6 +493,7 @@ class SignoriniPart:
     bounded = True
     driven = False
     friction = None  # its NodalFriction, with friction
+    obstacle_normals = None  # its ObstacleNormalForce, with normals = "obstacle"
     _time = 0.0  # of the last accepted step
 
     def __init__(self, law: Signorini, u: fem.Function, facet_tags, equilibrium, name: str,
@@ -513,6 +533,8 @@ class SignoriniPart:
         """The gaps at ``time`` (raises InputError where a ray loses the obstacle)."""
         if self.moving:
             self._nodes.gap = contact_gap(self.law, self._nodes, time)
+            if self.obstacle_normals is not None:
+                self.obstacle_normals.refresh(time)
         if self.friction is not None and (self.law.translation is not None
                                           or self.law.rotation is not None):
             # the obstacle's points at the nodes' places at the last step, and where they go
@@ -532,8 +554,9 @@ class SignoriniPart:
                 "slip": last["slip"], "slips": last["slips"]}
 
     def solver_terms(self) -> list:
-        """Nodal terms of the step's residual and Jacobian (friction), for the step solver."""
-        return [] if self.friction is None else [self.friction]
+        """Nodal terms of the step's residual and Jacobian (friction, the obstacle's normals), for
+        the step solver."""
+        return [t for t in (self.friction, self.obstacle_normals) if t is not None]
 
     def bound_gaps(self) -> np.ndarray:
         """The right-hand sides of the bounds u_ν ≤ g at the nodes."""

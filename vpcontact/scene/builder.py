@@ -352,7 +352,8 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
         center = (0.0,) * 3 if turn is None else turn.center + (0.0,) * (3 - len(turn.center))
         return Signorini(tag, obstacle=phi, max_distance=spec.max_distance or 1e3,
                          obstacle_moves=moves, translation=translation, rotation=rotation,
-                         rotation_center=center, friction=_friction(spec.friction))
+                         rotation_center=center, friction=_friction(spec.friction),
+                         normals=spec.normals)
     if gap is None or gap.is_constant:
         return Signorini(tag, gap=0.0 if gap is None else gap.value(),
                          friction=_friction(spec.friction))

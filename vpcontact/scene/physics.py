@@ -21,7 +21,7 @@ __all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contacts", "read_law"]
 
 LAW_KEYS = ("type", "scheme", "sigma_y", "mu_star", "yield_set", "a", "b")
 CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "motion", "rotation", "force",
-                "max_distance", "mu", "alpha", "friction")
+                "max_distance", "mu", "alpha", "friction", "normals")
 FRICTION_KEYS = ("type", "coefficient", "threshold")
 ROTATION_KEYS = ("center", "angle", "axis")
 LAW_TYPES = ("elastic", "perzyna", "linear")
@@ -120,6 +120,15 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     if kind == "signorini":
         for key in ("mu", "alpha"):
             t.forbid(key, "only for type = 'normal_compliance'")
+    else:
+        t.forbid("normals", "only for type = 'signorini' (a rigid obstacle's normals)")
+    if not t.has("obstacle"):
+        t.forbid("normals", "only with an obstacle (a gap alone has no surface to take "
+                            "normals from)")
+    if t.has("force"):
+        t.forbid("normals", "not with an obstacle driven by a force (its equation balances "
+                            "the forces along the body's normals only)")
+    normals = t.choice("normals", ("body", "obstacle"), "body")
     if dim == 1 and t.has("friction"):
         t.forbid("friction", "a 1-D body has no tangential direction to slip in")
     friction = _friction(t, dim) if t.has("friction") and dim != 1 else None
@@ -140,7 +149,7 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
         rotation = _rotation(t, dim) if t.has("rotation") and moves else None
         force = t.exprs("force", ("t",), dim, dim) if t.has("force") and moves else None
         return ContactSpec(kind, boundary, obstacle=obstacle, motion=motion, rotation=rotation,
-                           force=force, friction=friction,
+                           force=force, friction=friction, normals=normals,
                            max_distance=t.number("max_distance", DEFAULT_MAX_DISTANCE,
                                                  check=greater(0)),
                            mu=t.number("mu", check=greater(0)) if kind != "signorini" else None,

@@ -222,7 +222,9 @@ class ContactSpec:
         max_distance: longest ray searched for the obstacle (with an obstacle only).
         mu: deformability μ of the foundation (normal compliance only).
         alpha: exponent α of normal compliance (normal compliance only).
-        friction: Coulomb or Tresca friction (normal compliance only), or ``None``.
+        friction: Coulomb or Tresca friction, or ``None``.
+        normals: the direction of a rigid obstacle's contact force, ``"body"`` (the body's
+            normal, the paper's condition) or ``"obstacle"`` (the obstacle's normal: ploughing).
     """
 
     type: str = "none"
@@ -236,6 +238,7 @@ class ContactSpec:
     mu: float | None = None
     alpha: float | None = None
     friction: FrictionSpec | None = None
+    normals: str = "body"
 
 
 @dataclass(frozen=True)

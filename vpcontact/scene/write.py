@@ -123,6 +123,7 @@ def dump(scene: Any) -> str:
             "rotation": contact.rotation, "force": contact.force,
             "max_distance": contact.max_distance, "mu": contact.mu,
             "alpha": contact.alpha,
+            "normals": None if contact.normals == "body" else contact.normals,
             "friction": None if contact.friction is None else {
                 k: v for k, v in (("type", contact.friction.type),
                                   ("coefficient", contact.friction.coefficient),
