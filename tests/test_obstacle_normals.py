@@ -5,7 +5,8 @@ vpcontact.model.obstacle_normals).
 * An elastic block pressed against a rigid plane inclined at α to its top face: every contact
   node's force is along the plane's normal, so the total tangential force over the normal one is
   tan α exactly (to solver tolerance), whichever nodes touch — P1 and the mixed P2–P1
-  formulation. With the body's normals (the default, the paper's condition) it is 0.
+  formulation, and in 3-D along the direction the plane rises in. With the body's normals (the
+  default, the paper's condition) it is 0.
 * The Jacobian stays exact: the same Newton iterations as with the body's normals.
 * The key is validated (located errors, exit 2) and written back by ``show``.
 """
@@ -88,6 +89,33 @@ def test_the_force_on_an_inclined_plane_is_along_its_normal(shared_tmp_path, dis
     assert not np.allclose(f["contact_y"], g["contact_y"], rtol=1e-3)
     # the exact Jacobian: no more Newton iterations than with the body's normals
     assert sum(its) <= sum(its_body), (its, its_body)
+
+
+def test_3d_the_force_on_a_plane_inclined_diagonally_is_along_its_normal(shared_tmp_path):
+    """3-D (two tangential unknowns per node): a plane inclined by α about the direction
+    ⊥ e = (1, 2, 0)/√5 gives a tangential force tan α × the normal one, along e."""
+    e = np.array([1.0, 2.0, 0.0]) / np.sqrt(5.0)
+    n = np.sin(ALPHA) * e + np.array([0.0, 0.0, -np.cos(ALPHA)])
+    text = (INCLINED.replace('type = "rectangle"', 'type = "box"')
+            .replace("upper = [1.0, 0.25]", "upper = [1.0, 1.0, 0.25]")
+            .replace("lower = [0.0, 0.0]", "lower = [0.0, 0.0, 0.0]")
+            .replace("cells = [32, 8]", "cells = [6, 6, 2]")
+            .replace('axis = "y", value = 0.0', 'axis = "z", value = 0.0')
+            .replace('axis = "y", value = 0.25', 'axis = "z", value = 0.25')
+            .replace('plane = "strain"\n', "")
+            .replace('motion = ["0", "-0.01*t"]', 'motion = ["0", "0", "-0.01*t"]'))
+    text = re.sub(r"obstacle = \{.*\}", "obstacle = { shape = \"plane\", point = [0.0, 0.0, 0.25], "
+                  f"normal = [{n[0]!r}, {n[1]!r}, {n[2]!r}] }}", text)
+    scene = write_shared(shared_tmp_path / "box.toml", text.replace("NORMALS", 'normals = "obstacle"'))
+    out = shared_tmp_path / "box"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    lines = (out / "reactions.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
+    force = np.column_stack([rows[:, header.index(f"contact_{c}")] for c in "xyz"])[1:]
+    assert np.all(-force[:, 2] > 0.1)
+    assert np.allclose(force[:, :2] / -force[:, 2:], np.tan(ALPHA) * e[:2], rtol=1e-8, atol=0), \
+        force[:, :2] / -force[:, 2:] - np.tan(ALPHA) * e[:2]
 
 
 @pytest.mark.parametrize("change, key, message", [
