@@ -63,6 +63,10 @@ from vpcontact.errors import InputError
 
 #: δ / h_T of the default Jacobian floor (see the module docstring).
 RELATIVE_TANGENT_FLOOR = 1e-12
+#: With friction, Γ3's terms are integrated with one rule of degree 2 k + this (k the
+#: displacement's degree): exact for the traction of a sliding or sticking face (degree 2 k),
+#: two more where stick turns to slip or the pressure to zero inside a facet.
+FRICTION_QUADRATURE_EXTRA = 2
 
 
 @dataclass(frozen=True)
@@ -216,6 +220,15 @@ class CompliancePart:
 
     def terms(self, u, du, v, normal, ds):
         law = self.law
+        if law.friction is not None:
+            # One rule for the residual and the Jacobian: left to FFCx, each form gets the degree
+            # estimated for its integrand — 10 and 26 for P1, whose friction terms have
+            # quotients and roots — and the Jacobian is then not the derivative of the discrete
+            # residual: Newton converged linearly (11, 10, 14, 14, 11 iterations per pressing
+            # step of the dragged block in tests/test_friction.py; 7, 1, 1, 1, 1 with one rule).
+            degree = FRICTION_QUADRATURE_EXTRA + 2 * u.ufl_element().degree()
+            ds = ufl.Measure("ds", domain=ds.ufl_domain(), subdomain_data=ds.subdomain_data(),
+                             metadata={"quadrature_degree": degree})
         residual, jacobian = law.residual(u, v, normal, ds), law.jacobian(u, du, v, normal, ds)
         if law.friction is not None:
             from vpcontact.model.friction import friction_terms
