@@ -93,3 +93,6 @@ class NodalTerm:
 
     def predict(self, x: PETSc.Vec) -> None:
         """The step's initial guess (nothing to change unless a term says so)."""
+
+    def prepare_jacobian(self, x: PETSc.Vec) -> None:
+        """Before the UFL Jacobian is assembled at x (nothing unless a term says so)."""

@@ -68,7 +68,10 @@ class StepSolver:
         linear: "direct", "iterative" or "auto" (by size), see :mod:`vpcontact.solver.linear`;
             user options (``ksp_*``, ``pc_*``, ``lagged_*``) override its choices.
         nodal_terms: objects with ``residual(x, b)`` and ``jacobian(x, A)`` that add their
-            nodal terms to SNES's residual and Jacobian at x (friction on Signorini parts).
+            nodal terms to SNES's residual and Jacobian at x, ``predict(x)`` (the step's initial
+            guess), ``prepare_jacobian(x)`` (before the UFL Jacobian's assembly) and
+            ``current(x)`` (friction on Signorini parts, the obstacle's normals, the sticking
+            guess of friction on compliant parts).
     """
 
     def __init__(self, fields, bcs: Sequence[fem.DirichletBCMetaClass],
@@ -485,6 +488,8 @@ class StepSolver:
             return  # A unchanged: the preconditioner (factorization) is reused as it is
         self._load_iterate(x)
         start = _time.perf_counter()
+        for term in self._nodal:
+            term.prepare_jacobian(x)
         A = A_snes if self._P is None else self._A_phys
         self.fields.assemble_jacobian(A, self.bcs)
         if self._columns is not None:
