@@ -132,22 +132,26 @@ def friction_terms(friction: Friction, u, u_old, t_old, du, v, normal, pressure,
 
 
 class StickingGuess:
-    """Each step starts sticking, on a normal-compliance part with friction (a nodal term of the
-    step solver: hooks ``bind``, ``predict``, ``prepare_jacobian``, ``commit``).
+    """A step's second guess on a normal-compliance part with friction: sticking (a nodal term of
+    the step solver: hooks ``bind``, ``predict``, ``has_fallback``, ``fallback``,
+    ``prepare_jacobian``).
 
-    The step's initial guess (the problem's predictor extrapolates the last steps' motion) is
-    changed at the nodes pressed at the last step: their tangential unknowns go back to where the
-    last step left them, the normal ones keep the extrapolation. And the Jacobian at that guess
-    takes the stick branch wherever the face is pressed (``stick_first``, a constant of the UFL
-    Jacobian, set to 1 there and 0 at every other iterate). From the extrapolated guess, a step
+    SNES starts from the problem's guess, which extrapolates the last steps' motion; where that
+    does not converge within :data:`~vpcontact.solver.step_solver.FALLBACK_AFTER` iterations it
+    starts again from this one: the tangential unknowns of the nodes pressed at the last step
+    where that step left them (the normal ones keep the extrapolation), and the Jacobian at that
+    guess on the stick branch wherever the face is pressed (``stick_first``, a constant of the UFL
+    Jacobian, 1 there and 0 at every other iterate). From the extrapolated guess alone, a step
     that reverses the drag started with every node slipping forward; the stick interval, 2b/k_t
     wide, was jumped over and Newton cycled between slipping forward and back (the dragged block
     of tests/test_friction.py pulled back by 1e−5 / 1e−4 / 1e−3 within a step: 34 / 32 / 22
-    iterations and a step cut; now 1 / 1 / 1). The price is in monotone steps, where the
-    extrapolation had the slip right: 5 Newton iterations per pressing step instead of 1, 2–3
-    per dragging step instead of 1–2. The same idea as on rigid obstacles
-    (:class:`~vpcontact.model.nodal_friction.NodalFriction`), where the obstacle's own motion
-    decides which nodes keep the slip branch; a fixed foundation has none.
+    iterations and a step cut; from the sticking guess 1 / 1 / 1, so 6 in all with the try
+    before). Starting every step sticking instead costs monotone steps, where the extrapolation
+    has the slip right: 5 Newton iterations per pressing step instead of 1, 3 per dragging step
+    instead of 0–1. On rigid obstacles (:class:`~vpcontact.model.nodal_friction.NodalFriction`)
+    every step starts sticking: there the obstacle's own motion tells which nodes keep the slip
+    branch, and a fixed foundation has none. (Choosing between the two guesses by their
+    residuals fails: at the reversal the extrapolated guess has the smaller one.)
 
     Args:
         part: the :class:`~vpcontact.model.normal_compliance.CompliancePart`.
@@ -179,14 +183,25 @@ class StickingGuess:
         self.rows = positions[self.u_rows].astype(np.int32)
 
     def predict(self, x) -> None:
+        """The problem's (extrapolated) guess is tried first: nothing to change."""
+        self._guess = None
+
+    def _held(self) -> np.ndarray:
+        return self.free & self.part.pressed_at(self.part.u_old)[:, None]
+
+    def has_fallback(self) -> bool:
+        """A sticking guess exists where nodes were pressed at the last step (collective)."""
+        return self.comm.allreduce(bool(self._held().any()), op=MPI.LOR)
+
+    def fallback(self, x) -> None:
         """Stick the tangential unknowns of the nodes pressed at the last step (the part's
-        u_old, restored with a checkpoint) in the guess x (SNES's vector)."""
+        u_old, restored with a checkpoint) in the guess x (SNES's vector); the Jacobian there
+        takes the stick branch."""
         values = x.getArray()
         old = self.part.u_old.x.array[self.u_rows] / self.scale
         guess = values[self.rows]
         along = np.einsum("ij,ij->i", guess - old, self.normals)[:, None] * self.normals
-        held = self.free & self.part.pressed_at(self.part.u_old)[:, None]
-        values[self.rows] = np.where(held, old + along, guess)
+        values[self.rows] = np.where(self._held(), old + along, guess)
         self._guess = values.copy()
 
     def prepare_jacobian(self, x) -> None:

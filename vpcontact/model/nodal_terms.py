@@ -96,3 +96,10 @@ class NodalTerm:
 
     def prepare_jacobian(self, x: PETSc.Vec) -> None:
         """Before the UFL Jacobian is assembled at x (nothing unless a term says so)."""
+
+    def has_fallback(self) -> bool:
+        """Whether :meth:`fallback` has another initial guess for this step (collective)."""
+        return False
+
+    def fallback(self, x: PETSc.Vec) -> None:
+        """Replace the guess x by the other one (see :meth:`has_fallback`)."""

@@ -32,6 +32,10 @@ _counter = itertools.count()
 #: A Newton iteration "stagnates" while ||F|| stays above this many times its best value in the
 #: step (see :meth:`StepSolver._converged`).
 STAGNATION_FACTOR = 10.0
+#: Newton iterations allowed from the predicted guess before SNES starts again from a nodal
+#: term's other guess (:meth:`StepSolver._run_with_fallback`): the issue "Friction" asks for at
+#: most 6 per step.
+FALLBACK_AFTER = 5
 
 
 class StepSolver:
@@ -572,7 +576,7 @@ class StepSolver:
                 guess.copy(self._x)
             guess.destroy()
         if snes is self.snes:
-            reason, more = self._run(self.snes)
+            reason, more = self._run_with_fallback()
             its += more
             self.vi_solves += self._bounds is not None
         finite = self.u.function_space.mesh.comm.allreduce(
@@ -593,6 +597,31 @@ class StepSolver:
         if self._bounds is not None:
             self._record_active()
         return its
+
+    def _run_with_fallback(self) -> tuple[int, int]:
+        """SNES from the guess; where a nodal term has another guess (friction on a compliant
+        part: sticking, see :class:`~vpcontact.model.friction.StickingGuess`), the first try
+        stops after :data:`FALLBACK_AFTER` iterations and, unconverged, SNES starts again from
+        the other guess. (Iterations of both count.)"""
+        if not any([term.has_fallback() for term in self._nodal]):  # (collective: no short cut)
+            return self._run(self.snes)
+        guess = self._x.copy()
+        rtol, atol, stol, max_it = self.snes.getTolerances()
+        self.snes.setTolerances(max_it=min(FALLBACK_AFTER, max_it))
+        try:
+            reason, first = self._run(self.snes)
+        finally:
+            self.snes.setTolerances(max_it=max_it)
+        if reason > 0:
+            guess.destroy()
+            return reason, first
+        guess.copy(self._x)
+        guess.destroy()
+        for term in self._nodal:
+            term.fallback(self._x)
+        self._loaded_valid = False
+        reason, more = self._run(self.snes)
+        return reason, first + more
 
     def _run(self, snes: PETSc.SNES) -> tuple[int, int]:
         """One SNES solve from self._x: (converged reason, iterations)."""
