@@ -174,13 +174,10 @@ class StickingGuess:
     def bind(self, scale: float, dirichlet_dofs: np.ndarray, layout) -> None:
         """Place u's rows in SNES's vector (``layout.field_indices()``; SNES's u is u/scale);
         prescribed ones stay as the solver set them."""
+        from vpcontact.model.nodal_terms import displacement_positions
         self.scale = scale
         self.free = ~np.isin(self.u_rows, dirichlet_dofs)
-        probe = layout.create_vector()
-        start = probe.getOwnershipRange()[0]
-        probe.destroy()
-        positions = layout.field_indices()["displacement"].getIndices() - start
-        self.rows = positions[self.u_rows].astype(np.int32)
+        self.rows = displacement_positions(layout)[0][self.u_rows].astype(np.int32)
 
     def predict(self, x) -> None:
         """The problem's (extrapolated) guess is tried first: nothing to change."""

@@ -29,6 +29,16 @@ from petsc4py import PETSc
 ON_BOUND = 1e-8
 
 
+def displacement_positions(layout) -> tuple[np.ndarray, int]:
+    """(where each of u's local dofs sits in SNES's local vector, the vector's global size): the
+    layout's ``field_indices()`` (frames and force-driven unknowns keep its numbering,
+    :mod:`vpcontact.solver.variables`). Collective."""
+    probe = layout.create_vector()
+    start, size = probe.getOwnershipRange()[0], probe.getSize()
+    probe.destroy()
+    return layout.field_indices()["displacement"].getIndices() - start, size
+
+
 class NodalTerm:
     """The framed nodes of a Signorini ``part`` and the multipliers λ at an iterate."""
 
@@ -61,11 +71,7 @@ class NodalTerm:
         :mod:`vpcontact.solver.variables`). Collective."""
         self.scale = scale
         self.free = ~np.isin(self.u_tangential, dirichlet_dofs)
-        probe = layout.create_vector()
-        start = probe.getOwnershipRange()[0]
-        self.num_fields = probe.getSize()
-        probe.destroy()
-        positions = layout.field_indices()["displacement"].getIndices() - start
+        positions, self.num_fields = displacement_positions(layout)
         self.slots = positions[self.u_slots].astype(np.int32)
         self.tangential = positions[self.u_tangential].astype(np.int32)
 
@@ -98,7 +104,8 @@ class NodalTerm:
         """Before the UFL Jacobian is assembled at x (nothing unless a term says so)."""
 
     def has_fallback(self) -> bool:
-        """Whether :meth:`fallback` has another initial guess for this step (collective)."""
+        """Whether :meth:`fallback` has another initial guess for this step (collective; see
+        :meth:`~vpcontact.solver.step_solver.StepSolver._run_with_fallback`)."""
         return False
 
     def fallback(self, x: PETSc.Vec) -> None:

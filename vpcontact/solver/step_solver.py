@@ -73,9 +73,11 @@ class StepSolver:
             user options (``ksp_*``, ``pc_*``, ``lagged_*``) override its choices.
         nodal_terms: objects with ``residual(x, b)`` and ``jacobian(x, A)`` that add their
             nodal terms to SNES's residual and Jacobian at x, ``predict(x)`` (the step's initial
-            guess), ``prepare_jacobian(x)`` (before the UFL Jacobian's assembly) and
-            ``current(x)`` (friction on Signorini parts, the obstacle's normals, the sticking
-            guess of friction on compliant parts).
+            guess), ``has_fallback()``/``fallback(x)`` (another guess, see
+            :meth:`_run_with_fallback`), ``prepare_jacobian(x)`` (before the UFL Jacobian's
+            assembly) and ``current(x)`` (friction on Signorini parts, the obstacle's normals,
+            the sticking guess of friction on compliant parts;
+            :class:`~vpcontact.model.nodal_terms.NodalTerm` has the defaults).
     """
 
     def __init__(self, fields, bcs: Sequence[fem.DirichletBCMetaClass],
