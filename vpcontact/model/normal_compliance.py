@@ -212,11 +212,10 @@ class CompliancePart:
     def snes_defaults(self, linear_law: bool) -> dict:
         """SNES options this part needs: for α < 1 with a law linear in ε, a backtracking line
         search (p ↦ p^α is concave: full steps can overshoot past contact onset and cycle).
-        Friction needs none: with its residual and Jacobian on one quadrature rule and the
-        sticking guess, full steps take 6, 5, 5, 4, 4 Newton iterations in the pressing steps of
-        the dragged block of tests/test_friction.py and 3, 2, 2, 2, 2 while it slides (the
-        critical-point line search, chosen while the Jacobian was inexact, takes 7 in the
-        first)."""
+        Friction needs none: with its residual and Jacobian on one quadrature rule, full steps
+        take 6, 1, 1, 1, 1 Newton iterations in the pressing steps of the dragged block of
+        tests/test_friction.py and 2, 1, 0, 0, 0 while it slides (the critical-point line
+        search, chosen while the Jacobian was inexact, takes 7 in the first)."""
         return {"snes_linesearch_type": "bt"} if linear_law and self.law.alpha < 1.0 else {}
 
     def terms(self, u, du, v, normal, ds):
