@@ -689,7 +689,7 @@ def test_a_turning_roller_drags_the_block_along_its_surface(turn):
     assert comm.allreduce(int(touching.sum())) >= 9
     assert np.all(last["slips"][touching])
     # the nodal force as a vector: its one tangential component along the frame's tangent
-    tangent = part.friction._frame_tangents[touching][:, :2, 0]
+    tangent = part.friction.frame_tangents[touching][:, :2, 0]
     vector = last["force"][touching][:, :1] * tangent
     lam = last["lam"][touching]
     assert np.allclose(np.linalg.norm(vector, axis=1), 0.3 * lam, rtol=1e-8)
@@ -715,7 +715,7 @@ def test_a_block_stuck_on_a_turning_roller_moves_with_its_surface():
     touching = last["lam"] > 0
     assert MPI.COMM_WORLD.allreduce(int(touching.sum())) >= 9
     assert not np.any(last["slips"][touching])
-    tangent = part.friction._frame_tangents[touching][:, :2, 0]
+    tangent = part.friction.frame_tangents[touching][:, :2, 0]
     moved = problem.u.x.array[rows][touching] - pressed[touching]
     carried = np.einsum("ij,ij->i", moved, tangent)
     y = part.nodes.points[touching, :2] + pressed[touching] - ROLLER_CENTRE[:2]

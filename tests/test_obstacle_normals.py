@@ -11,6 +11,7 @@ vpcontact.model.obstacle_normals).
 * The key is validated (located errors, exit 2) and written back by ``show``.
 """
 
+import json
 import re
 
 import numpy as np
@@ -66,12 +67,16 @@ def _run(tmp, name, normals, discretization=""):
     scene = write_shared(tmp / f"{name}.toml", text)
     out = tmp / name
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    return _reactions(out), summary["newton_iterations"]
+
+
+def _reactions(out):
+    """reactions.csv of a run: its columns by name."""
     lines = (out / "reactions.csv").read_text().splitlines()
     header = lines[0].split(",")
     rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
-    import json
-    summary = json.loads((out / "summary.json").read_text())
-    return {h: rows[:, i] for i, h in enumerate(header)}, summary["newton_iterations"]
+    return {h: rows[:, i] for i, h in enumerate(header)}
 
 
 @pytest.mark.parametrize("discretization", [
@@ -109,10 +114,8 @@ def test_3d_the_force_on_a_plane_inclined_diagonally_is_along_its_normal(shared_
     scene = write_shared(shared_tmp_path / "box.toml", text.replace("NORMALS", 'normals = "obstacle"'))
     out = shared_tmp_path / "box"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
-    lines = (out / "reactions.csv").read_text().splitlines()
-    header = lines[0].split(",")
-    rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
-    force = np.column_stack([rows[:, header.index(f"contact_{c}")] for c in "xyz"])[1:]
+    f = _reactions(out)
+    force = np.column_stack([f[f"contact_{c}"] for c in "xyz"])[1:]
     assert np.all(-force[:, 2] > 0.1)
     assert np.allclose(force[:, :2] / -force[:, 2:], np.tan(ALPHA) * e[:2], rtol=1e-8, atol=0), \
         force[:, :2] / -force[:, 2:] - np.tan(ALPHA) * e[:2]

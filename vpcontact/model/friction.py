@@ -159,13 +159,11 @@ class StickingGuess:
     """
 
     def __init__(self, part, stick_first):
-        cd = part.nodes
-        bs = part.u.function_space.dofmap.index_map_bs
         self.part = part
         self.comm = part.u.function_space.mesh.comm
         self.stick_first = stick_first
-        self.u_rows = (cd.nodes[:, None] * bs + np.arange(bs)).astype(np.int32)
-        self.normals = cd.normals
+        self.u_rows = part.node_rows
+        self.normals = part.nodes.normals
         self.rows = self.u_rows
         self.free = np.ones(self.rows.shape, dtype=bool)
         self.scale = 1.0

@@ -96,10 +96,9 @@ class NodalFriction(NodalTerm):
         self._predicted = np.full(self.tangential.shape, np.nan)  # the step's initial x̃_τ
         self.last: Optional[dict] = None                  # the accepted step's state
         self.touching: Optional[np.ndarray] = None        # on the obstacle (bind, commit)
-        self._frame_tangents = self.frame_tangents
         # an obstacle driven by a force moves by an unknown d along e: the tangential part of
         # its motion at node i is τ_i · e per unit of d (see :meth:`bind`)
-        self._drive = (np.einsum("nkt,k->nt", self._frame_tangents, part.direction[:self.bs])
+        self._drive = (np.einsum("nkt,k->nt", self.frame_tangents, part.direction[:self.bs])
                        if getattr(part, "driven", False) else None)
         self._drive_row: Optional[int] = None   # δ's global row in SNES's vector
         self._d_old = 0.0                        # the obstacle's d at the last step
@@ -135,7 +134,7 @@ class NodalFriction(NodalTerm):
     def move(self, delta: np.ndarray) -> None:
         """The obstacle's points at the nodes move by ``delta`` (N, 3) over the step (a
         translation, a rotation or both): the slip is relative to them."""
-        self.shift = np.einsum("nkt,nk->nt", self._frame_tangents, delta[:, :self.bs])
+        self.shift = np.einsum("nkt,nk->nt", self.frame_tangents, delta[:, :self.bs])
 
     def state(self, x: np.ndarray, lam: np.ndarray) -> dict:
         """Nodal friction at the iterate x with normal forces λ, this rank."""

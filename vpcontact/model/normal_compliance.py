@@ -246,8 +246,7 @@ class CompliancePart:
         if self.law.friction is None:
             return None
         from vpcontact.model.friction import return_mapping
-        cd, bs = self.nodes, self.u.function_space.dofmap.index_map_bs
-        rows = cd.nodes[:, None] * bs + np.arange(bs)
+        cd, rows = self.nodes, self.node_rows
         normals = cd.normals
         def tangential(values):
             w = values[rows]
@@ -277,6 +276,12 @@ class CompliancePart:
             from vpcontact.model.friction import StickingGuess
             self._guess = StickingGuess(self, self._stick_first)
         return [self._guess]
+
+    @property
+    def node_rows(self) -> np.ndarray:
+        """(n, d) local indices of u's dofs at this rank's contact nodes (``nodes.nodes``)."""
+        bs = self.u.function_space.dofmap.index_map_bs
+        return (self.nodes.nodes[:, None] * bs + np.arange(bs)).astype(np.int32)
 
     @property
     def u_old(self):
