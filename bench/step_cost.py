@@ -15,7 +15,7 @@ assembly, linear solves, VI and other SNES work), Newton iterations, factorizati
 
     .venv/bin/python bench/step_cost.py [--sizes2d 16 32 64 128] [--sizes3d 4 6 8 12 16] [--ranks 2]
         [--mpi-size 8] [--mu-star MU] [--sigma-y SY] [--window3d T0 T1] [-o KEY=VALUE ...]
-        [--out FILE]
+        [--scheme implicit|linearized|explicit] [--out FILE]
 
 ``--mu-star``/``--sigma-y`` change the paper's μ* = 200 and σ_Y = √10 (a larger μ* lowers the
 stiffness contrast k E/μ* of the plastic tangent, which decides whether multigrid works);
@@ -51,7 +51,8 @@ LARGEST_FIT = 4  # sizes in the large-size fit
 
 def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
            mu_star: Optional[float] = None, formulation: str = "displacement",
-           linear: str = "auto", window: Optional[tuple] = None) -> dict:
+           linear: str = "auto", window: Optional[tuple] = None,
+           scheme: str = "implicit") -> dict:
     """Run one size in this process; the record of its timed window (``sigma_y``: the paper's
     √10 by default; ``inf`` makes the body elastic; ``window``: (t0, t1) instead of the
     dimension's default)."""
@@ -63,7 +64,7 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
     mu_star = paper.MU_STAR if mu_star is None else mu_star
 
     comm = MPI.COMM_WORLD
-    data = {"petsc_options": options, "sigma_y": sigma_y, "mu_star": mu_star}
+    data = {"petsc_options": options, "sigma_y": sigma_y, "mu_star": mu_star, "scheme": scheme}
     if dim == 2:
         problem = paper.signorini_2d(n, **data)
     else:
@@ -87,7 +88,8 @@ def single(dim: int, n: int, options: dict, sigma_y: Optional[float] = None,
                 for k, v in (lagged.counters() if lagged is not None else {}).items()
                 if not isinstance(v, str)}
     dofs = solver.unknowns
-    return {"dim": dim, "n": n, "window": [t0, t1], "formulation": formulation, "linear": solver.linear, "sigma_y": _json_float(sigma_y),
+    return {"dim": dim, "n": n, "window": [t0, t1], "formulation": formulation,
+            "scheme": scheme, "linear": solver.linear, "sigma_y": _json_float(sigma_y),
             "mu_star": mu_star, "dofs": dofs, "ranks": comm.size, "steps": steps,
             "seconds_per_step": wall / steps,
             "seconds_per_step_split": time_split(t),
@@ -175,6 +177,9 @@ def main(argv=None) -> int:
     parser.add_argument("--window3d", nargs=2, type=float, default=list(WINDOWS[3]),
                         metavar=("T0", "T1"), help="the 3-D test's timed interval [s] (the run-in "
                         "from t = 0 to T0 is untimed; default 0.3 0.4, the beam flowing)")
+    parser.add_argument("--scheme", choices=["implicit", "linearized", "explicit"],
+                        default="implicit", help="the law's time scheme (default: implicit Euler; "
+                        "linearized: one linear problem per step)")
     parser.add_argument("--single", nargs=2, type=int, metavar=("DIM", "N"), help=argparse.SUPPRESS)
     parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "step_cost.json"))
     args = parser.parse_args(argv)
@@ -183,7 +188,7 @@ def main(argv=None) -> int:
     if args.single:
         record = single(*args.single, dict(o.split("=", 1) for o in args.options), args.sigma_y,
                         args.mu_star, args.formulation, args.linear,
-                        tuple(args.window3d) if args.single[0] == 3 else None)
+                        tuple(args.window3d) if args.single[0] == 3 else None, args.scheme)
         if MPI.COMM_WORLD.rank == 0:
             print("RECORD " + json.dumps(record), flush=True)
         return 0
@@ -197,9 +202,9 @@ def main(argv=None) -> int:
     for flag, value in (("--sigma-y", args.sigma_y), ("--mu-star", args.mu_star)):
         if value is not None:
             passed_on += [flag, repr(value)]
-    passed_on += ["--formulation", args.formulation, "--linear", args.linear,
+    passed_on += ["--formulation", args.formulation, "--linear", args.linear, "--scheme", args.scheme,
                   "--window3d", *map(repr, args.window3d)]
-    result.update({"formulation": args.formulation, "linear": args.linear})
+    result.update({"formulation": args.formulation, "linear": args.linear, "scheme": args.scheme})
     for dim, sizes in ((2, args.sizes2d), (3, args.sizes3d)):
         records = [launch(dim, n, 1, passed_on) for n in sizes]
         result[f"{dim}d"] = {"records": records,

@@ -139,7 +139,7 @@ def _parser() -> argparse.ArgumentParser:
                       help="what to halve at each level (default: both, the paper's h = k path)")
     conv.add_argument("--levels", type=int, default=4, help="number of refinements (default 4)")
     conv.add_argument("--degree", type=int, choices=(1, 2), default=1)
-    conv.add_argument("--law-scheme", choices=("explicit", "implicit"),
+    conv.add_argument("--law-scheme", choices=("explicit", "implicit", "linearized"),
                       help="Euler scheme of the law (default: the scene's)")
     conv.add_argument("--time-scheme", choices=("euler", "bdf2"), default="euler")
     conv.set_defaults(func=_study_convergence)
@@ -148,9 +148,10 @@ def _parser() -> argparse.ArgumentParser:
     cost.add_argument("--levels", type=int, default=3,
                       help="h and k levels each (levels² runs per method; default 3)")
     cost.add_argument("--degrees", type=int, nargs="+", choices=(1, 2), default=None)
-    cost.add_argument("--schemes", nargs="+", choices=("explicit", "implicit", "bdf2"),
-                      help="explicit/implicit Euler, or BDF2 (default: the scene's, implicit, "
-                           "bdf2)")
+    cost.add_argument("--schemes", nargs="+",
+                      choices=("explicit", "implicit", "linearized", "bdf2"),
+                      help="explicit/implicit/linearized Euler, or BDF2 (default: the scene's, "
+                           "implicit, bdf2)")
     cost.set_defaults(func=_study_cost)
     for p in (conv, cost):
         p.add_argument("scene", help="bundled scene name or TOML file (built-in mesh)")

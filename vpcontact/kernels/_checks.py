@@ -15,7 +15,7 @@ import numpy.typing as npt
 #: Valid values of ``model``.
 MODELS: Tuple[str, ...] = ("1d", "plane_stress", "3d", "3d_standard")
 #: Valid values of ``scheme``.
-SCHEMES: Tuple[str, ...] = ("explicit", "implicit")
+SCHEMES: Tuple[str, ...] = ("explicit", "implicit", "linearized")
 #: Relative tolerance of the symmetry check on tensor inputs.
 SYMMETRY_RTOL = 1e-10
 

@@ -1,6 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""Time-discrete stress updates (explicit and implicit Euler, BDF2 factors) of Perzyna's law and
-of the linear law G = aσ + bε, with their consistent tangents."""
+"""Time-discrete stress updates (explicit, implicit and linearly implicit Euler, BDF2 factors)
+of Perzyna's law and of the linear law G = aσ + bε, with their consistent tangents."""
 
 from __future__ import annotations
 
@@ -54,7 +54,7 @@ def stress_update_mandel(
         sigma_y: Yield stress, > 0 (``inf``: purely elastic).
         mu_star: Viscosity :math:`\\mu^* > 0`.
         model: One of :data:`MODELS`.
-        scheme: ``"implicit"`` (default) or ``"explicit"``.
+        scheme: ``"implicit"`` (default), ``"explicit"`` or ``"linearized"``.
         out: Optional pair of preallocated float64 C-contiguous arrays of shapes
             ``(N, n)`` and ``(N, n, n)``, written in place (they may alias the inputs);
             with ``tangent=False`` the second must be None.
@@ -108,9 +108,9 @@ def stress_update_linear_mandel(
     k = _positive("dt", dt)
     young, poisson = _elastic(model, E, nu)
     ca, cb = _finite("a", a), _finite("b", b)
-    if scheme == "implicit" and not 1.0 - k * ca > 0.0:
+    if scheme != "explicit" and not 1.0 - k * ca > 0.0:
         raise ValueError(
-            f"dt: the implicit step of G = a sigma + b eps needs 1 - dt*a > 0, got dt*a = {k * ca}"
+            f"dt: the {scheme} step of G = a sigma + b eps needs 1 - dt*a > 0, got dt*a = {k * ca}"
         )
     so, eo, en = _step_inputs(model, sigma_old, eps_old, eps_new)
     s_out, t_out = _outputs(out, so.shape[0], mandel_size(model), tangent)
@@ -161,6 +161,10 @@ def stress_update(
       Frobenius norm. That is :math:`P_K\\sigma^{tr}` (a radial return) for ``"1d"`` and
       the 3-D models, but not for ``"plane_stress"``, where :math:`\\mathcal{E}` has two
       different eigenvalues on the constrained components.
+    * linearized (linearly implicit Euler): G linearised at :math:`\\sigma_{n-1}`,
+      :math:`(I - kG'(\\sigma_{n-1}))(\\sigma_n - \\sigma_{n-1}) = \\mathcal{E}(\\varepsilon_n -
+      \\varepsilon_{n-1}) + kG(\\sigma_{n-1})`: affine in :math:`\\varepsilon_n`, elastic at
+      points whose :math:`\\sigma_{n-1}` lies in K.
 
     Args:
         sigma_old: :math:`\\sigma_{n-1}`, shape ``(N, d, d)`` (``(N, 1, 1)`` for ``"1d"``).
@@ -172,7 +176,7 @@ def stress_update(
         sigma_y: Yield stress, > 0 (``inf``: purely elastic).
         mu_star: Viscosity :math:`\\mu^* > 0`.
         model: One of :data:`MODELS`.
-        scheme: ``"implicit"`` (default) or ``"explicit"``.
+        scheme: ``"implicit"`` (default), ``"explicit"`` or ``"linearized"``.
 
     Returns:
         ``(sigma_new, tangent)``: shapes ``(N, d, d)`` and ``(N, d, d, d, d)``, with
@@ -223,7 +227,7 @@ def stress_update_linear(
         a: Coefficient of :math:`\\sigma` (finite).
         b: Coefficient of :math:`\\varepsilon` (finite).
         model: One of :data:`MODELS`.
-        scheme: ``"explicit"`` (default) or ``"implicit"``.
+        scheme: ``"explicit"`` (default), ``"implicit"`` or ``"linearized"``.
 
     Returns:
         ``(sigma_new, tangent)``: shapes ``(N, d, d)`` and ``(N, d, d, d, d)``.

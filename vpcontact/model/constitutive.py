@@ -10,7 +10,10 @@ Each law advances the stress at all quadrature points at once through the C++ ke
 
 ``scheme="explicit"`` evaluates G at the previous step (the paper's Problem 4);
 ``scheme="implicit"`` at the new one (Problem 2), which the kernels solve locally and
-differentiate exactly for the Newton tangent.
+differentiate exactly for the Newton tangent; ``scheme="linearized"`` (linearly implicit
+Euler) takes G at the new step through its linearisation at the previous one, so that the
+update is affine in ε_n and a step is one linear (or contact) problem, with a tangent that is
+fixed within the step but changes from step to step.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ import numpy as np
 from vpcontact import kernels
 from vpcontact.errors import InputError
 
-SCHEMES = ("explicit", "implicit")
+SCHEMES = ("explicit", "implicit", "linearized")
 #: Poisson's ratio of the kernels' stand-in for an incompressible material (see
 #: :meth:`Elasticity.kernel_moduli`).
 INCOMPRESSIBLE_SURROGATE_NU = 0.3
@@ -121,6 +124,11 @@ class LinearRate:
         return True
 
     @property
+    def constant_tangent(self) -> bool:
+        """dσ_n/dε_n depends on the step size only (not on the state)."""
+        return True
+
+    @property
     def plastic(self) -> bool:
         """No yield set: G is linear."""
         return False
@@ -133,7 +141,7 @@ class LinearRate:
     def explicit_step_limit(self) -> float:
         """Largest stable explicit step: σ is multiplied by (1 + k a) per step, so k < 2/|a|
         for a < 0 (inf for the implicit scheme or a ≥ 0, where nothing oscillates)."""
-        if self.scheme == "implicit" or self.a >= 0:
+        if self.scheme != "explicit" or self.a >= 0:
             return math.inf
         return 2.0 / abs(self.a)
 
@@ -173,6 +181,13 @@ class Perzyna:
 
     @property
     def linear_in_strain(self) -> bool:
+        """The update is affine in ε_n (explicit and linearized schemes)."""
+        return self.scheme != "implicit"
+
+    @property
+    def constant_tangent(self) -> bool:
+        """dσ_n/dε_n depends on the step size only: E (explicit scheme). The linearized
+        scheme's tangent depends on σ_{n−1}, the implicit one's on σ_n."""
         return self.scheme == "explicit"
 
     @property
@@ -189,12 +204,13 @@ class Perzyna:
         return self.elasticity.model in ("3d", "3d_standard")
 
     def explicit_step_limit(self) -> float:
-        """Largest stable step of the explicit scheme, 2 μ* / λ_max(E) (inf if implicit).
+        """Largest stable step of the explicit scheme, 2 μ* / λ_max(E) (inf for the implicit
+        and linearized schemes).
 
         Inside K the update is elastic; outside it, σ - P_K σ is damped by (I - (k/μ*) E)
         per step in the energy norm, which stays a contraction only for k < 2μ*/λ_max(E).
         """
-        if self.scheme == "implicit":
+        if self.scheme != "explicit":
             return math.inf
         return 2.0 * self.mu_star / float(np.linalg.eigvalsh(self.elasticity.matrix()).max())
 
@@ -237,6 +253,10 @@ class PlaneStrain:
     @property
     def linear_in_strain(self) -> bool:
         return self.law.linear_in_strain
+
+    @property
+    def constant_tangent(self) -> bool:
+        return self.law.constant_tangent
 
     @property
     def isochoric(self) -> bool:

@@ -152,7 +152,8 @@ class LawSpec:
     Attributes:
         type: ``"elastic"`` (G = 0), ``"perzyna"`` (G = -(1/μ*) E(σ - P_K σ)) or ``"linear"``
             (G = aσ + bε).
-        scheme: ``"explicit"`` (G at the previous step) or ``"implicit"`` (at the new step).
+        scheme: ``"explicit"`` (G at the previous step), ``"implicit"`` (at the new step) or
+            ``"linearized"`` (at the new step, linearised at the previous one).
         sigma_y, mu_star: Perzyna's yield stress and viscosity (constants), else ``None``.
         yield_set: Perzyna's yield set, ``"paper"`` or ``"von_mises"``, else ``None``.
         a, b: coefficients of the linear law (constants), else ``None``.

@@ -202,6 +202,12 @@ class QuasistaticProblem:
             # Stiff elastic (E ~ 1e8) against soft viscous (μ*/k) branches: full Newton steps
             # overshoot where points unload; the l2 line search restores convergence.
             defaults["snes_linesearch_type"] = "l2"
+        elif not law.constant_tangent:
+            # The linearized scheme: each step is a linear problem (a bound-constrained QP with
+            # Signorini), but the soft flowing zones make SNES VI's active set cycle between two
+            # sets with full steps (the paper's 3-D test on 18×6×6 cells: three steps cut after
+            # 50 iterations each); backtracking breaks the cycle (2–6 iterations per step).
+            defaults["snes_linesearch_type"] = "bt"
         for part in self.contacts:  # (a part's needs come first: friction's line search)
             defaults.update(part.snes_defaults(law.linear_in_strain))
         normal = ufl.FacetNormal(mesh)
@@ -229,7 +235,7 @@ class QuasistaticProblem:
         # has a Jacobian that changes with the step size only; it is factorized once per size.
         # (an obstacle driven by a force changes the unknowns' map P at every step)
         nodal_terms = [t for p in self.contacts for t in p.solver_terms()]
-        constant_jacobian = (law.linear_in_strain and not terms and not nodal_terms
+        constant_jacobian = (law.constant_tangent and not terms and not nodal_terms
                              and not any(p.driven for p in self.contacts))
         self.fields.compile(residual, jacobian)
         rotation = None
@@ -273,11 +279,11 @@ class QuasistaticProblem:
         self.state.set_stress(values)
 
     def _tangent_out(self, key) -> Optional[np.ndarray]:
-        """Where the update writes the tangent, or None to skip it: a law affine in ε_n has a
-        tangent that depends only on the step size (``key``), so it is written once per size."""
-        if self.law.linear_in_strain and key == self._tangent_key:
+        """Where the update writes the tangent, or None to skip it: a law whose tangent depends
+        only on the step size (``key``) has it written once per size."""
+        if self.law.constant_tangent and key == self._tangent_key:
             return None
-        self._tangent_key = key if self.law.linear_in_strain else None
+        self._tangent_key = key if self.law.constant_tangent else None
         return self.state.tangent_view()
 
     def _update_stress(self) -> None:

@@ -38,7 +38,7 @@ class Method:
     """How a run discretises the scene, apart from h and k."""
 
     degree: int = 1
-    law_scheme: str = "implicit"   # "explicit" | "implicit" (the law's Euler)
+    law_scheme: str = "implicit"   # "explicit" | "implicit" | "linearized" (the law's Euler)
     time_scheme: str = "euler"     # "euler" | "bdf2"
     tolerance: Optional[float] = None  # adaptive steps (k then the largest step), or uniform
 

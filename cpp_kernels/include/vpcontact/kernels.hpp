@@ -26,11 +26,13 @@ enum class Scheme
   /// G evaluated at (sigma_{n-1}, eps_{n-1}).
   explicit_euler,
   /// G evaluated at (sigma_n, eps_n).
-  implicit_euler
+  implicit_euler,
+  /// G linearised at (sigma_{n-1}, eps_{n-1}) and taken at (sigma_n, eps_n).
+  linearized_euler
 };
 
 /// Parse a scheme name.
-/// @param name "explicit" or "implicit".
+/// @param name "explicit", "implicit" or "linearized".
 /// @throws std::invalid_argument naming `scheme` if the name is unknown.
 inline Scheme parse_scheme(const std::string& name)
 {
@@ -38,8 +40,10 @@ inline Scheme parse_scheme(const std::string& name)
     return Scheme::explicit_euler;
   if (name == "implicit")
     return Scheme::implicit_euler;
+  if (name == "linearized")
+    return Scheme::linearized_euler;
   throw std::invalid_argument("scheme: unknown scheme '" + name
-                              + "'; valid schemes are 'explicit', 'implicit'");
+                              + "'; valid schemes are 'explicit', 'implicit', 'linearized'");
 }
 
 /// Call f(std::integral_constant<int, n>{}) with n = mandel_size(model).
@@ -76,7 +80,8 @@ inline void project(const Elasticity& elasticity, double sigma_y, std::size_t nu
            });
 }
 
-/// Perzyna step (explicit: generic; implicit: exact specialisation).
+/// Perzyna step (explicit: generic; implicit: exact specialisation;
+/// linearized: elastic at points in K, generic elsewhere).
 /// @param scheme Time-stepping scheme.
 /// @param elasticity Elastic constants (with the model).
 /// @param sigma_y Yield stress, > 0.
@@ -93,6 +98,8 @@ inline void perzyna_update(Scheme scheme, const Elasticity& elasticity, double s
              const Perzyna<N> law(YieldSet<N>(elasticity, sigma_y), mu_star);
              if (scheme == Scheme::explicit_euler)
                explicit_update(law, elasticity, dt, step);
+             else if (scheme == Scheme::linearized_euler)
+               linearized_update(law, elasticity, dt, step);
              else
                implicit_update(law, elasticity, dt, step);
            });
@@ -112,7 +119,8 @@ inline void perzyna_update_newton(const Elasticity& elasticity, double sigma_y, 
            });
 }
 
-/// Step with G = a sigma + b eps (implicit: closed form).
+/// Step with G = a sigma + b eps (implicit: closed form; linearized: generic,
+/// equal to the implicit step up to round-off).
 /// @param scheme Time-stepping scheme.
 /// @param elasticity Elastic constants (with the model).
 /// @param a Coefficient of sigma.
@@ -129,6 +137,8 @@ inline void linear_update(Scheme scheme, const Elasticity& elasticity, double a,
              const LinearG<N> law(a, b);
              if (scheme == Scheme::explicit_euler)
                explicit_update(law, elasticity, dt, step);
+             else if (scheme == Scheme::linearized_euler)
+               linearized_update(law, elasticity, dt, step);
              else
                implicit_update(law, elasticity, dt, step);
            });

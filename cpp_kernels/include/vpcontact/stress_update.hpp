@@ -10,6 +10,12 @@
 ///  - implicit: sigma_n = sigma^tr + k G(sigma_n, eps_n), solved by Newton's
 ///    method on R(sigma) = sigma - sigma^tr - k G(sigma, eps_n) with
 ///    J = I - k dG/dsigma; tangent J^{-1} (E + k dG/deps) (consistent).
+///  - linearized (linearly implicit Euler, the rate-tangent method of Peirce,
+///    Shih and Needleman): G linearised at the start of the step,
+///    J (sigma_n - sigma_{n-1}) = (E + k dG/deps) (eps_n - eps_{n-1})
+///    + k G(sigma_{n-1}, eps_{n-1}), J = I - k dG/dsigma there; affine in eps_n
+///    with the tangent J^{-1} (E + k dG/deps), fixed within the step. For a law
+///    linear in (sigma, eps) it is the implicit step.
 ///
 /// Two laws have exact specialisations of the implicit step:
 ///
@@ -420,6 +426,100 @@ void implicit_update_newton(const Law& law, const Elasticity& elasticity, double
         B[i] = C[i] + dt * B[i];
       detail::store(detail::lu_solve_matrix<N>(A, perm, B), step.tangent + p * N * N);
     }
+  }
+}
+
+/// Linearly implicit step (see the file documentation): one linear solve per
+/// point with the law's derivatives at (sigma_{n-1}, eps_{n-1}); affine in
+/// eps_n, so a body's step is linear in u (no constitutive Newton iteration).
+/// @tparam Law A ViscoplasticLaw.
+/// @param law The law G.
+/// @param elasticity Elastic constants of the rate equation.
+/// @param dt Time step k > 0.
+/// @param step The arrays.
+/// @throws std::invalid_argument naming `E`, `nu`, `model` or `dt`;
+/// std::domain_error if the trial stress or the result is not finite, or if
+/// I - k dG/dsigma is singular at a point.
+template <class Law>
+void linearized_update(const Law& law, const Elasticity& elasticity, double dt,
+                       const StepArrays& step)
+{
+  static_assert(is_viscoplastic_law_v<Law>, "Law must model the ViscoplasticLaw concept");
+  constexpr int N = Law::size;
+  detail::check_step<N>(dt, step);
+  const detail::Matrix<N> C = elasticity_matrix<N>(elasticity);
+  for (std::size_t p = 0; p < step.num_points; ++p)
+  {
+    detail::Vector<N> en;
+    (void)detail::trial_stress<N>(C, step, p, en); // checks sigma^tr finite
+    const detail::Vector<N> so = detail::load<N>(step.sigma_old + p * N);
+    const detail::Vector<N> eo = detail::load<N>(step.eps_old + p * N);
+    detail::Matrix<N> A, B;
+    std::array<int, N> perm;
+    law.dG_dsigma(so.data(), eo.data(), A.data());
+    for (int i = 0; i < N * N; ++i)
+      A[i] = (i % (N + 1) == 0 ? 1.0 : 0.0) - dt * A[i];
+    if (!detail::lu_factor<N>(A, perm))
+      throw std::domain_error("linearized_update: I - dt dG/dsigma is singular at point "
+                              + std::to_string(p));
+    law.dG_deps(so.data(), eo.data(), B.data());
+    for (int i = 0; i < N * N; ++i)
+      B[i] = C[i] + dt * B[i];
+    detail::Vector<N> g, rhs;
+    law.G(so.data(), eo.data(), g.data());
+    for (int i = 0; i < N; ++i)
+    {
+      double sum = dt * g[i];
+      for (int j = 0; j < N; ++j)
+        sum += B[i * N + j] * (en[j] - eo[j]);
+      rhs[i] = sum;
+    }
+    const detail::Vector<N> ds = detail::lu_solve<N>(A, perm, rhs);
+    detail::Vector<N> s;
+    double not_finite = 0.0;
+    for (int i = 0; i < N; ++i)
+    {
+      s[i] = so[i] + ds[i];
+      not_finite += s[i] - s[i]; // 0, or NaN if s[i] is +-inf or NaN
+    }
+    if (!(not_finite == 0.0))
+      throw std::domain_error("linearized_update: sigma_new is not finite at point "
+                              + std::to_string(p));
+    detail::store(s, step.sigma_new + p * N);
+    if (step.tangent)
+      detail::store(detail::lu_solve_matrix<N>(A, perm, B), step.tangent + p * N * N);
+  }
+}
+
+/// Linearly implicit step for Perzyna's law: as the generic one, with the
+/// elastic step (sigma^tr, tangent E) at points whose sigma_{n-1} lies in K,
+/// where G and its derivative vanish.
+template <int N>
+void linearized_update(const Perzyna<N>& law, const Elasticity& elasticity, double dt,
+                       const StepArrays& step)
+{
+  detail::check_step<N>(dt, step);
+  const detail::Matrix<N> C = elasticity_matrix<N>(elasticity);
+  for (std::size_t p = 0; p < step.num_points; ++p)
+  {
+    const detail::Vector<N> so = detail::load<N>(step.sigma_old + p * N);
+    detail::Vector<N> tau;
+    if (law.set.clearly_inside(so) || project<N>(law.set, so.data(), tau.data()) == 0)
+    {
+      detail::Vector<N> en;
+      detail::store(detail::trial_stress<N>(C, step, p, en), step.sigma_new + p * N);
+      detail::store_if(C, step.tangent, p * N * N);
+      continue;
+    }
+    StepArrays one = step;
+    one.num_points = 1;
+    one.sigma_old += p * N;
+    one.eps_old += p * N;
+    one.eps_new += p * N;
+    one.sigma_new += p * N;
+    if (one.tangent)
+      one.tangent += p * N * N;
+    linearized_update<Perzyna<N>>(law, elasticity, dt, one);
   }
 }
 
