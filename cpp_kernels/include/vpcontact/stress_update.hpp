@@ -204,6 +204,31 @@ inline void rank_one_plus_classes(double coefficient, const Vector<N>& U, const 
   add_classes<N>(me, T);
 }
 
+/// The matrices of a step linearised at (sigma, eps): A = I - k dG/dsigma (LU
+/// factors) and B = C + k dG/deps, so that dsigma_n = A^{-1} B deps_n.
+template <int N>
+struct StepMatrices
+{
+  Matrix<N> A, B;
+  std::array<int, N> perm;
+
+  /// @throws std::domain_error naming `who` and the point if A is singular.
+  template <class Law>
+  StepMatrices(const Law& law, double dt, const Matrix<N>& C, const Vector<N>& sigma,
+               const Vector<N>& eps, const char* who, std::size_t point)
+  {
+    law.dG_dsigma(sigma.data(), eps.data(), A.data());
+    for (int i = 0; i < N * N; ++i)
+      A[i] = (i % (N + 1) == 0 ? 1.0 : 0.0) - dt * A[i];
+    if (!lu_factor<N>(A, perm))
+      throw std::domain_error(std::string(who) + ": I - dt dG/dsigma is singular at point "
+                              + std::to_string(point));
+    law.dG_deps(sigma.data(), eps.data(), B.data());
+    for (int i = 0; i < N * N; ++i)
+      B[i] = C[i] + dt * B[i];
+  }
+};
+
 template <std::size_t M>
 inline void store_if(const std::array<double, M>& x, double* p, std::size_t offset) noexcept
 {
@@ -413,21 +438,49 @@ void implicit_update_newton(const Law& law, const Elasticity& elasticity, double
     detail::store(s, step.sigma_new + p * N);
     if (step.tangent)
     {
-      detail::Matrix<N> A, B;
-      std::array<int, N> perm;
-      law.dG_dsigma(s.data(), en.data(), A.data());
-      for (int i = 0; i < N * N; ++i)
-        A[i] = (i % (N + 1) == 0 ? 1.0 : 0.0) - dt * A[i];
-      if (!detail::lu_factor<N>(A, perm))
-        throw std::domain_error("implicit_update: I - dt dG/dsigma is singular at point "
-                                + std::to_string(p));
-      law.dG_deps(s.data(), en.data(), B.data());
-      for (int i = 0; i < N * N; ++i)
-        B[i] = C[i] + dt * B[i];
-      detail::store(detail::lu_solve_matrix<N>(A, perm, B), step.tangent + p * N * N);
+      const detail::StepMatrices<N> m(law, dt, C, s, en, "implicit_update", p);
+      detail::store(detail::lu_solve_matrix<N>(m.A, m.perm, m.B), step.tangent + p * N * N);
     }
   }
 }
+
+namespace detail
+{
+/// The linearly implicit step at point p (see linearized_update()).
+template <class Law, int N = Law::size>
+void linearized_point(const Law& law, double dt, const Matrix<N>& C, const StepArrays& step,
+                      std::size_t p)
+{
+  Vector<N> en;
+  (void)trial_stress<N>(C, step, p, en); // checks sigma^tr finite
+  const Vector<N> so = load<N>(step.sigma_old + p * N);
+  const Vector<N> eo = load<N>(step.eps_old + p * N);
+  const StepMatrices<N> m(law, dt, C, so, eo, "linearized_update", p);
+  Vector<N> g, rhs;
+  law.G(so.data(), eo.data(), g.data());
+  for (int i = 0; i < N; ++i)
+  {
+    double sum = dt * g[i];
+    for (int j = 0; j < N; ++j)
+      sum += m.B[i * N + j] * (en[j] - eo[j]);
+    rhs[i] = sum;
+  }
+  const Vector<N> ds = lu_solve<N>(m.A, m.perm, rhs);
+  Vector<N> s;
+  double not_finite = 0.0;
+  for (int i = 0; i < N; ++i)
+  {
+    s[i] = so[i] + ds[i];
+    not_finite += s[i] - s[i]; // 0, or NaN if s[i] is +-inf or NaN
+  }
+  if (!(not_finite == 0.0))
+    throw std::domain_error("linearized_update: sigma_new is not finite at point "
+                            + std::to_string(p));
+  store(s, step.sigma_new + p * N);
+  if (step.tangent)
+    store(lu_solve_matrix<N>(m.A, m.perm, m.B), step.tangent + p * N * N);
+}
+} // namespace detail
 
 /// Linearly implicit step (see the file documentation): one linear solve per
 /// point with the law's derivatives at (sigma_{n-1}, eps_{n-1}); affine in
@@ -449,46 +502,7 @@ void linearized_update(const Law& law, const Elasticity& elasticity, double dt,
   detail::check_step<N>(dt, step);
   const detail::Matrix<N> C = elasticity_matrix<N>(elasticity);
   for (std::size_t p = 0; p < step.num_points; ++p)
-  {
-    detail::Vector<N> en;
-    (void)detail::trial_stress<N>(C, step, p, en); // checks sigma^tr finite
-    const detail::Vector<N> so = detail::load<N>(step.sigma_old + p * N);
-    const detail::Vector<N> eo = detail::load<N>(step.eps_old + p * N);
-    detail::Matrix<N> A, B;
-    std::array<int, N> perm;
-    law.dG_dsigma(so.data(), eo.data(), A.data());
-    for (int i = 0; i < N * N; ++i)
-      A[i] = (i % (N + 1) == 0 ? 1.0 : 0.0) - dt * A[i];
-    if (!detail::lu_factor<N>(A, perm))
-      throw std::domain_error("linearized_update: I - dt dG/dsigma is singular at point "
-                              + std::to_string(p));
-    law.dG_deps(so.data(), eo.data(), B.data());
-    for (int i = 0; i < N * N; ++i)
-      B[i] = C[i] + dt * B[i];
-    detail::Vector<N> g, rhs;
-    law.G(so.data(), eo.data(), g.data());
-    for (int i = 0; i < N; ++i)
-    {
-      double sum = dt * g[i];
-      for (int j = 0; j < N; ++j)
-        sum += B[i * N + j] * (en[j] - eo[j]);
-      rhs[i] = sum;
-    }
-    const detail::Vector<N> ds = detail::lu_solve<N>(A, perm, rhs);
-    detail::Vector<N> s;
-    double not_finite = 0.0;
-    for (int i = 0; i < N; ++i)
-    {
-      s[i] = so[i] + ds[i];
-      not_finite += s[i] - s[i]; // 0, or NaN if s[i] is +-inf or NaN
-    }
-    if (!(not_finite == 0.0))
-      throw std::domain_error("linearized_update: sigma_new is not finite at point "
-                              + std::to_string(p));
-    detail::store(s, step.sigma_new + p * N);
-    if (step.tangent)
-      detail::store(detail::lu_solve_matrix<N>(A, perm, B), step.tangent + p * N * N);
-  }
+    detail::linearized_point(law, dt, C, step, p);
 }
 
 /// Linearly implicit step for Perzyna's law: as the generic one, with the
@@ -509,17 +523,9 @@ void linearized_update(const Perzyna<N>& law, const Elasticity& elasticity, doub
       detail::Vector<N> en;
       detail::store(detail::trial_stress<N>(C, step, p, en), step.sigma_new + p * N);
       detail::store_if(C, step.tangent, p * N * N);
-      continue;
     }
-    StepArrays one = step;
-    one.num_points = 1;
-    one.sigma_old += p * N;
-    one.eps_old += p * N;
-    one.eps_new += p * N;
-    one.sigma_new += p * N;
-    if (one.tangent)
-      one.tangent += p * N * N;
-    linearized_update<Perzyna<N>>(law, elasticity, dt, one);
+    else
+      detail::linearized_point(law, dt, C, step, p);
   }
 }
 
