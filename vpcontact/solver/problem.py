@@ -235,8 +235,9 @@ class QuasistaticProblem:
         # has a Jacobian that changes with the step size only; it is factorized once per size.
         # (an obstacle driven by a force changes the unknowns' map P at every step)
         nodal_terms = [t for p in self.contacts for t in p.solver_terms()]
-        constant_jacobian = (law.constant_tangent and not terms and not nodal_terms
-                             and not any(p.driven for p in self.contacts))
+        fixed = not terms and not nodal_terms and not any(p.driven for p in self.contacts)
+        constant_jacobian = law.constant_tangent and fixed
+        jacobian_per_step = law.linear_in_strain and not law.constant_tangent and fixed
         self.fields.compile(residual, jacobian)
         rotation = None
         frames = merged_frames(mesh.comm, self.contacts)
@@ -251,7 +252,8 @@ class QuasistaticProblem:
                                  options, options_prefix, scale=scale,
                                  load=sum(external[1:], external[0]) if external else None,
                                  point_forces=self._point_forces if self._point_loads else None,
-                                 constant_jacobian=constant_jacobian, variables=self.variables,
+                                 constant_jacobian=constant_jacobian,
+                                 jacobian_per_step=jacobian_per_step, variables=self.variables,
                                  nodal_terms=nodal_terms,
                                  linear=linear)
         bounds = merged_bounds(self.u, self.contacts)
@@ -281,9 +283,11 @@ class QuasistaticProblem:
     def _tangent_out(self, key) -> Optional[np.ndarray]:
         """Where the update writes the tangent, or None to skip it: a law whose tangent depends
         only on the step size (``key``) has it written once per size."""
-        if self.law.constant_tangent and key == self._tangent_key:
+        if self.law.linear_in_strain and not self.law.constant_tangent:
+            key = (key, self.step_index, float(self.time.value))  # fixed within a step
+        if self.law.linear_in_strain and key == self._tangent_key:
             return None
-        self._tangent_key = key if self.law.constant_tangent else None
+        self._tangent_key = key if self.law.linear_in_strain else None
         return self.state.tangent_view()
 
     def _update_stress(self) -> None:

@@ -63,6 +63,10 @@ class StepSolver:
         constant_jacobian: the Jacobian depends on the step size only (a constitutive update
             linear in ε and no nonlinear contact term): it is assembled once per step size and
             the linear solver's factorization is reused across iterations and steps.
+        jacobian_per_step: the Jacobian is constant within a step but changes between steps (a
+            constitutive update affine in ε with a state-dependent tangent: the linearized
+            scheme): it is assembled once per step and the preconditioner or factorization
+            reused across the step's iterations.
         variables: a change of variables u = P x̃ (:class:`~vpcontact.solver.variables.
             ChangeOfVariables`: local frames at contact nodes, and the displacements of
             obstacles driven by a force appended to the unknowns): SNES then solves
@@ -84,7 +88,8 @@ class StepSolver:
                  refresh: Callable[[], None], petsc_options: Optional[dict] = None,
                  options_prefix: Optional[str] = None, scale: float = 1.0, load=None,
                  point_forces: Optional[Callable[[], tuple]] = None,
-                 constant_jacobian: bool = False, variables=None,
+                 constant_jacobian: bool = False, jacobian_per_step: bool = False,
+                 variables=None,
                  linear: str = "direct", nodal_terms: Sequence = ()):
         if not scale > 0:
             raise ValueError(f"scale must be > 0, got {scale}")
@@ -109,6 +114,9 @@ class StepSolver:
         self._b_free = None  # residual without Dirichlet conditions (the round-off scale)
         self._point_forces = point_forces
         self.constant_jacobian = constant_jacobian
+        self.jacobian_per_step = jacobian_per_step and not constant_jacobian
+        self._step_key = None  # (t_n, k) of the solve under way (jacobian_per_step)
+        self._jacobian_step_key = None  # ... and of the assembled Jacobian
         self._jacobian_dt: Optional[float] = None  # step size of the assembled constant Jacobian
         self._restored_jacobian_dt: Optional[float] = None  # the same before a restart
         self.dt = 0.0  # set by the owner before each solve (only the constant-Jacobian reuse reads it)
@@ -336,7 +344,8 @@ class StepSolver:
         In between, quadrature points still switch between the elastic and the plastic branch:
         allowing the lag there too (lag_below = 1) halves the factorizations but doubles the
         substitutions, a net loss of 30-45 %."""
-        return (self.constant_jacobian or self.snes.getIterationNumber() == 0
+        return (self.constant_jacobian or self.jacobian_per_step
+                or self.snes.getIterationNumber() == 0
                 or self.snes.getFunctionNorm() <= self._lag_below * self._fnorm0)
 
     #: Entries of the initial guess this close to a bound (a length relative to the mesh's
@@ -492,6 +501,8 @@ class StepSolver:
     def _jacobian(self, snes, x, A_snes, P) -> None:
         if self.constant_jacobian and self._jacobian_dt == self.dt:
             return  # A unchanged: the preconditioner (factorization) is reused as it is
+        if self.jacobian_per_step and self._jacobian_step_key == self._step_key:
+            return  # the same within the step
         self._load_iterate(x)
         start = _time.perf_counter()
         for term in self._nodal:
@@ -515,10 +526,13 @@ class StepSolver:
         if self._block is not None:
             self._block.update()
         self._jacobian_dt = self.dt
+        self._jacobian_step_key = self._step_key
         self.jacobian_assemblies += 1
         restored, self._restored_jacobian_dt = self._restored_jacobian_dt, None
         if self.constant_jacobian and self.lagged_lu is not None and self.dt != restored:
             self.lagged_lu.expire()  # a new step size: the factors of M are out of date
+        if self.jacobian_per_step and self.lagged_lu is not None:
+            self.lagged_lu.expire()  # a new step: so are they
         self.timings["jacobian"] += _time.perf_counter() - start
 
     def solve(self, time: float, step: int, try_unconstrained: bool = False) -> int:
@@ -531,6 +545,7 @@ class StepSolver:
             ConvergenceError: SNES (or its linear solver) did not converge; ``u`` is then left at
                 the last iterate and must not be used as a result.
         """
+        self._step_key = (time, self.dt)
         self._force_scale = 0.0
         if self._load_vec is not None:
             with self._load_vec.localForm() as local:
