@@ -5,15 +5,20 @@ Each step of a body is then one linear problem (with contact, one bound-constrai
 here at the kernel level (the update against its definition, the implicit step and closed forms)
 and on the paper's tests (convergence in k, Newton iterations, the scene key)."""
 
+import json
 import math
+import re
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
-from vpcontact import kernels
+from vpcontact import cli, kernels
 from vpcontact.errors import InputError
 from vpcontact.model import Elasticity, LinearRate, Perzyna
+from vpcontact.scene import build, loads_text
+from vpcontact.solver import StepControl, advance
+from mpi_launch import write_shared
 
 E, NU, SY, MU = 100.0, 0.3, 1.0, 1.0
 
@@ -198,10 +203,6 @@ figures = false
 
 
 def test_a_scene_runs_with_the_linearized_scheme_and_show_writes_it_back(shared_tmp_path):
-    from vpcontact import cli
-    from vpcontact.scene import loads_text
-    from mpi_launch import write_shared
-    import json
     scene = loads_text(PLATE.replace("TIME", ""))
     assert scene.law.scheme == "linearized"
     assert loads_text(scene.to_toml()) == scene
@@ -214,9 +215,6 @@ def test_a_scene_runs_with_the_linearized_scheme_and_show_writes_it_back(shared_
 
 
 def test_bdf2_refuses_the_linearized_scheme(shared_tmp_path, capsys):
-    import re
-    from vpcontact import cli
-    from mpi_launch import write_shared
     path = write_shared(shared_tmp_path / "bdf.toml", PLATE.replace("TIME", 'scheme = "bdf2"'))
     assert cli.main(["run", str(path), "--out", str(shared_tmp_path / "bdf"), "--quiet"]) == 2
     err = capsys.readouterr().err
@@ -225,13 +223,16 @@ def test_bdf2_refuses_the_linearized_scheme(shared_tmp_path, capsys):
     assert not (shared_tmp_path / "bdf" / "summary.json").exists()
 
 
-def _plate(scheme, k, T=0.5):
-    """The plate of PLATE (plane strain, mixed formulation, pressed onto a rigid floor while it
-    flows) run to T with steps k (cut where SNES fails): (u, Newton iterations, steps)."""
-    from vpcontact.scene import build, loads_text
-    from vpcontact.solver import StepControl, advance
+def _plate_problem(scheme, T):
+    """The problem of PLATE (plane strain, mixed formulation, pressed onto a rigid floor while
+    it flows) with the given law scheme and final time."""
     text = PLATE.replace("TIME", "").replace('scheme = "linearized"', f'scheme = "{scheme}"')
-    problem = build(loads_text(text.replace("T = 0.2", f"T = {T}"))).problem
+    return build(loads_text(text.replace("T = 0.2", f"T = {T}"))).problem
+
+
+def _plate(scheme, k, T=0.5):
+    """The plate run to T with steps k (cut where SNES fails): (u, Newton iterations, steps)."""
+    problem = _plate_problem(scheme, T)
     steps = len(list(advance(problem, T, StepControl(k))))
     return problem.u, problem.solver.total_iterations, steps
 
@@ -258,12 +259,9 @@ def test_linearized_and_implicit_plates_converge_together_and_linearized_is_chea
 def test_the_jacobian_is_assembled_once_per_step_and_changes_nothing():
     """The linearized step's Jacobian is constant within the step: assembled once per step (and
     its factors or preconditioner kept), with the answers of assembling it at every iteration."""
-    from vpcontact.scene import build, loads_text
-    from vpcontact.solver import StepControl, advance
-    text = PLATE.replace("TIME", "").replace("T = 0.2", "T = 0.3")
     runs = []
     for per_step in (True, False):
-        problem = build(loads_text(text)).problem
+        problem = _plate_problem("linearized", 0.3)
         assert problem.solver.jacobian_per_step
         problem.solver.jacobian_per_step = per_step
         reports = list(advance(problem, 0.3, StepControl(0.03)))

@@ -197,12 +197,15 @@ class QuasistaticProblem:
                 raise
             self.contacts.append(part)
             taken = np.union1d(taken, _node_dofs(self.V, part.node_blocks)).astype(np.int32)
+        # an update affine in ε_n whose tangent depends on the state (the linearized scheme):
+        # the tangent and Jacobian are fixed within a step and change between steps
+        self._tangent_per_step = law.linear_in_strain and not law.constant_tangent
         defaults = {}
         if not law.linear_in_strain:
             # Stiff elastic (E ~ 1e8) against soft viscous (μ*/k) branches: full Newton steps
             # overshoot where points unload; the l2 line search restores convergence.
             defaults["snes_linesearch_type"] = "l2"
-        elif not law.constant_tangent:
+        elif self._tangent_per_step:
             # The linearized scheme: each step is a linear problem (a bound-constrained QP with
             # Signorini), but the soft flowing zones make SNES VI's active set cycle between two
             # sets with full steps (the paper's 3-D test on 18×6×6 cells: three steps cut after
@@ -237,7 +240,7 @@ class QuasistaticProblem:
         nodal_terms = [t for p in self.contacts for t in p.solver_terms()]
         fixed = not terms and not nodal_terms and not any(p.driven for p in self.contacts)
         constant_jacobian = law.constant_tangent and fixed
-        jacobian_per_step = law.linear_in_strain and not law.constant_tangent and fixed
+        jacobian_per_step = self._tangent_per_step and fixed
         self.fields.compile(residual, jacobian)
         rotation = None
         frames = merged_frames(mesh.comm, self.contacts)
@@ -283,7 +286,7 @@ class QuasistaticProblem:
     def _tangent_out(self, key) -> Optional[np.ndarray]:
         """Where the update writes the tangent, or None to skip it: a law whose tangent depends
         only on the step size (``key``) has it written once per size."""
-        if self.law.linear_in_strain and not self.law.constant_tangent:
+        if self._tangent_per_step:
             key = (key, self.step_index, float(self.time.value))  # fixed within a step
         if self.law.linear_in_strain and key == self._tangent_key:
             return None

@@ -135,6 +135,16 @@ inline void check_step(double dt, const StepArrays& step)
   }
 }
 
+/// Whether every entry of x is finite (a sum of x_i - x_i is 0, or NaN if one is +-inf or NaN).
+template <int N>
+inline bool all_finite(const Vector<N>& x) noexcept
+{
+  double sum = 0.0;
+  for (int i = 0; i < N; ++i)
+    sum += x[i] - x[i];
+  return sum == 0.0;
+}
+
 [[noreturn]] inline void throw_non_finite_trial(std::size_t p)
 {
   throw std::domain_error("stress update: the trial stress sigma_old + E (eps_new - eps_old)"
@@ -294,11 +304,9 @@ void explicit_update(const Perzyna<N>& law, const Elasticity& elasticity, double
   for (std::size_t p = 0; p < step.num_points; ++p)
   {
     detail::Vector<N> s = detail::trial_stress_by_classes<N>(set, step, p);
-    double not_finite = 0.0;
-    for (int a = 0; a < N; ++a)
-      not_finite += s[a] - s[a]; // 0, or NaN if s[a] is +-inf or NaN
-    if (!(not_finite == 0.0))
+    if (!detail::all_finite<N>(s))
       detail::throw_non_finite_trial(p);
+    double not_finite = 0.0;
     const detail::Vector<N> so = detail::load<N>(step.sigma_old + p * N);
     if (!set.clearly_inside(so))
     {
@@ -467,13 +475,9 @@ void linearized_point(const Law& law, double dt, const Matrix<N>& C, const StepA
   }
   const Vector<N> ds = lu_solve<N>(m.A, m.perm, rhs);
   Vector<N> s;
-  double not_finite = 0.0;
   for (int i = 0; i < N; ++i)
-  {
     s[i] = so[i] + ds[i];
-    not_finite += s[i] - s[i]; // 0, or NaN if s[i] is +-inf or NaN
-  }
-  if (!(not_finite == 0.0))
+  if (!all_finite<N>(s))
     throw std::domain_error("linearized_update: sigma_new is not finite at point "
                             + std::to_string(p));
   store(s, step.sigma_new + p * N);
