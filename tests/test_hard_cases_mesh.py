@@ -136,16 +136,20 @@ def test_load_reversal_lifts_off_with_a_permanent_set():
             ufl.le(t, 1.5), -12.0 + 40.0 * (t - 1.2), 4.0 * (t - 1.5)))
 
     problem = _square(8, 8, load=load)
-    flowed, released = False, None
+    flowed, released, peak = False, None, 0.0
     for step in advance(problem, 2.0, StepControl(0.05)):
         rep = problem.contact_monitor.report()
         assert rep.max_penetration <= 1e-10
         excess = _max_yield(problem) / SIGMA_Y**2 - 1.0
         flowed |= step.time <= 1.2 and excess > 1e-3
+        peak = max(peak, abs(rep.normal_force))
         if step.time > 1.5:
             assert excess <= 1e-4, f"t = {step.time}: {excess:.2e} outside K"
-            assert rep.active == 0 and abs(rep.normal_force) <= 1e-9, \
-                f"t = {step.time}: still touching ({rep.active} nodes, force {rep.normal_force})"
+            # Released: no active node, and what force is left is the Newton residual, small
+            # against the peak (1e-9 of it on the CI machine, 1e-12 on the development one).
+            assert rep.active == 0 and abs(rep.normal_force) <= 1e-8 * peak, \
+                f"t = {step.time}: still touching ({rep.active} nodes, force " \
+                f"{rep.normal_force} against a peak of {peak})"
         if rep.active == 0 and released is None and step.time > 1.2:
             released = step.time
     assert flowed, "the square must flow plastically while loaded"
