@@ -254,13 +254,54 @@ class LaggedDirectSolve(_ReducedSolve):
         self._rebuild_matrix(rstart)
         self._choose_factorization()
         self.inner.setOperators(self.matrix)
-        with options_in_database(self.prefix, self.options):
-            self.inner.setUp()  # numeric factorization; the symbolic one is reused after the first
-        self.factorizations += 1
-        self._factored = True
-        self.substitute(b, x)
+        self._factored = self._factorize()
+        if self._factored:
+            self.substitute(b, x)
+        if not self._factored or not np.all(np.isfinite(x.getArray(readonly=True))):
+            # (a factorization PETSc flags as failed makes the substitution write inf: SNES
+            # must see a failed linear solve, not a line search on an infinite direction)
+            self._factored = False
+            ksp.setConvergedReason(_KSP_REASON.DIVERGED_PC_FAILED)
+            return
         ksp.setIterationNumber(1)
         ksp.setConvergedReason(_KSP_REASON.CONVERGED_ITS)
+
+    #: MUMPS's INFOG(1) values that mean a work array was estimated too small at the analysis:
+    #: more delayed pivots than the analysis foresaw (an ill-conditioned, indefinite M)
+    MUMPS_WORKSPACE_ERRORS = (-8, -9, -11, -12, -14, -15)
+    #: the largest ICNTL(14) (percentage added to the estimated work arrays) tried
+    MUMPS_MAX_WORKSPACE_INCREASE = 1000
+
+    def _factorize(self) -> bool:
+        """The numeric factorization of M (the symbolic one is reused after the first); False
+        when it failed. MUMPS runs out of its work arrays when M needs more delayed pivots than
+        its analysis foresaw, and then fails at every later refactorization that reuses that
+        analysis (seen on a plane-strain plate with the implicit Perzyna update at k E/μ* =
+        5e4: INFOG(1) = −9 after a diverged step, then at every cut step, whatever its size):
+        the analysis is redone with a larger ICNTL(14), doubled until it fits or reaches
+        :attr:`MUMPS_MAX_WORKSPACE_INCREASE` percent."""
+        while True:
+            with options_in_database(self.prefix, self.options):
+                self.inner.setUp()
+            self.factorizations += 1
+            pc = self.inner.getPC()
+            if pc.getFactorSolverType() != "mumps":
+                return True  # (failures show as non-finite substitutions)
+            factor = pc.getFactorMatrix()
+            error = factor.getMumpsInfog(1)
+            if error >= 0:
+                return True
+            increase = factor.getMumpsIcntl(14)
+            if (error not in self.MUMPS_WORKSPACE_ERRORS
+                    or increase >= self.MUMPS_MAX_WORKSPACE_INCREASE):
+                return False
+            self.options["mat_mumps_icntl_14"] = min(2 * max(increase, 20),
+                                                     self.MUMPS_MAX_WORKSPACE_INCREASE)
+            kind = pc.getType()
+            pc.reset()  # a new analysis, with the larger work arrays
+            pc.setType(kind)
+            pc.setFactorSolverType("mumps")
+            self.inner.setOperators(self.matrix)
 
     def _choose_factorization(self) -> None:
         """Cholesky (LDLᵀ) when M is symmetric to round-off, else LU. LDLᵀ halves the
