@@ -29,10 +29,10 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact.model import Elastic, Elasticity, Perzyna
+from vpcontact.model import Elastic, Elasticity, Perzyna, PlaneStrain
 from vpcontact.model import NormalCompliance
 from vpcontact.errors import InputError
-from vpcontact.solver import Loads, QuasistaticProblem, tag_facets
+from vpcontact.solver import Dirichlet, Loads, QuasistaticProblem, tag_facets
 from vpcontact.solver import StepControl, advance
 
 CLAMP, TRACTION, CONTACT = 1, 2, 3
@@ -212,14 +212,17 @@ def test_column_3d_matches_closed_form_and_balances_forces(alpha):
     assert p > 0
 
 
-def test_stiff_foundation_with_alpha_below_one_converges_with_a_line_search():
-    """κ = 1, α = 1/2: full Newton steps (the default for elastic laws) cycle at contact onset
-    between overshooting past p = 0 and the unsupported prediction (module docstring of
-    vpcontact.model.normal_compliance); with a backtracking line search Newton converges, and quadratically once
-    the penetration is not tiny (measured: 9, 5, 4, 3, 3, ... iterations from the onset step)."""
+@pytest.mark.parametrize("line_search", ["bt", None])
+def test_stiff_foundation_with_alpha_below_one_converges_with_a_line_search(line_search):
+    """κ = 1, α = 1/2: full Newton steps cycle at contact onset between overshooting past p = 0
+    and the unsupported prediction (module docstring of vpcontact.model.normal_compliance); with
+    a line search Newton converges, and quadratically once the penetration is not tiny
+    (measured from the onset step: 6, 4, 3, 3, ... iterations with backtracking; 4, 2, 2, ...
+    with the critical-point search the part asks for by default, ``None`` here)."""
     alpha, mu = 0.5, compliance_mu(0.5, 1.0)
+    options = {} if line_search is None else {"snes_linesearch_type": line_search}
     problem = column(2, NormalCompliance(CONTACT, mu=mu, alpha=alpha, gap=GAP),
-                     petsc_options={"snes_linesearch_type": "bt"})
+                     petsc_options=options)
     its = []
     for _ in range(10):
         step = problem.step(0.1)
@@ -228,6 +231,30 @@ def test_stiff_foundation_with_alpha_below_one_converges_with_a_line_search():
         assert err <= 1e-9 * P_REF, f"t = {step.time}: u_2(0) off by {err:.3e}"
         its.append(step.newton_iterations)
     assert max(its) <= 12 and sum(its[6:]) <= 4 * 4, f"Newton iterations {its}"
+
+
+@pytest.mark.parametrize("alpha", [0.5, 0.8])
+def test_a_block_pressed_onto_a_stiff_root_foundation_converges_from_the_onset(alpha):
+    """An elastic block (E = 1e3, ν = 0.3, plane strain) touching the foundation (g = 0, μ = 1e-3)
+    at the start, pressed down by its top: every first step starts exactly at the onset, where
+    α max(p, δ)^(α-1) jumps from 0 to its cap. With the default line search (``cp`` for α < 1)
+    no step is cut and the onset step takes 10 / 4 Newton iterations (α = 1/2 / 0.8; with
+    ``bt``, the default before, 46 / 27 and a cut step), then 2-3; the foundation then carries
+    the top's reaction."""
+    mesh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.zeros(2), np.array([1.0, 0.25])], [64, 16])
+    tags = tag_facets(mesh, {1: lambda x: np.isclose(x[1], 0.25),
+                             2: lambda x: np.isclose(x[1], 0.0)})
+    still = lambda x, t: np.zeros(x.shape[1])  # noqa: E731
+    down = lambda x, t: np.full(x.shape[1], -0.002 * t / 0.5)  # noqa: E731
+    law = PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3)))
+    problem = QuasistaticProblem(mesh, tags, law, dirichlet=[Dirichlet(1, (still, down), "top")],
+                                 contact=NormalCompliance(2, mu=1e-3, alpha=alpha))
+    control = StepControl(0.05)
+    its = [step.newton_iterations for step in advance(problem, 0.5, control)]
+    assert not control.cuts and its[0] <= 15 and max(its[1:]) <= 4, its
+    reactions, foundation = problem.support_forces()
+    assert foundation[1] > 0 and abs(foundation[1] + reactions[0][1]) <= 1e-8 * foundation[1], \
+        (reactions, foundation)
 
 
 # --- contact onset with a moving contact zone ------------------------------------------------
