@@ -1,19 +1,33 @@
 # SPDX-License-Identifier: MIT
 """Shared fixtures: a temporary folder that is the same on every MPI rank.
 
-On more than one rank, a test that fails on some ranks only leaves the others waiting in the next
-collective call. So a failure on any rank prints its report and aborts the whole MPI job at once,
-with a non-zero exit, instead of letting the run hang until its time limit.
+On more than one rank, a test that fails on some ranks only can leave the others waiting in a
+collective call of the test. So after each test the ranks meet, on a communicator of their own
+(whose collectives cannot match the tests'), in a non-blocking barrier that every rank polls for
+:data:`AGREE_SECONDS`. When all ranks get there, the run goes on: a failure every rank saw is
+reported by each, and the later tests still run, so one CI run shows every failure. When a rank
+waits longer, another is stuck in the failed test: the waiting rank aborts the whole MPI job,
+with a non-zero exit and the failure's report, instead of letting the run hang until its time
+limit.
 """
 
 import logging
+import os
 import sys
+import time
 from pathlib import Path
 
 import pytest
 from mpi4py import MPI
 
 logging.getLogger().setLevel(logging.WARNING)  # the form compiler logs its builds at INFO
+
+#: How long a rank that finished a test waits for the others (the slowest test's imbalance
+#: between ranks is far below this).
+AGREE_SECONDS = float(os.environ.get("VPCONTACT_TEST_AGREE_SECONDS", "60"))
+
+_AGREE = MPI.COMM_WORLD.Dup() if MPI.COMM_WORLD.size > 1 else None
+_failed: set = set()  # the tests that failed on this rank (until the ranks met after it)
 
 
 @pytest.fixture
@@ -23,11 +37,30 @@ def shared_tmp_path(tmp_path) -> Path:
 
 
 def pytest_runtest_logreport(report):
-    comm = MPI.COMM_WORLD
-    if comm.size == 1 or not report.failed:
+    if _AGREE is None or not report.failed:
         return
-    sys.stderr.write(f"\n[rank {comm.rank} of {comm.size}] {report.nodeid} failed "
-                     f"({report.when}):\n{report.longreprtext}\n"
-                     f"[rank {comm.rank}] aborting the MPI job\n")
+    comm = MPI.COMM_WORLD
+    text = (f"\n[rank {comm.rank} of {comm.size}] {report.nodeid} failed ({report.when}):\n"
+            f"{report.longreprtext}\n")
+    _failed.add(report.nodeid)
+    sys.stderr.write(text)
     sys.stderr.flush()
-    comm.Abort(1)
+
+
+def pytest_runtest_logfinish(nodeid, location):
+    if _AGREE is None:
+        return
+    mine = nodeid in _failed
+    request = _AGREE.Ibarrier()
+    deadline = time.monotonic() + AGREE_SECONDS
+    while not request.Test():
+        if time.monotonic() > deadline:
+            comm = MPI.COMM_WORLD
+            sys.stderr.write(
+                f"\n[rank {comm.rank}] {nodeid}: the other ranks did not finish it within "
+                f"{AGREE_SECONDS:g} s (stuck after a failure on some rank"
+                f"{' — this one' if mine else ''}): aborting the MPI job\n")
+            sys.stderr.flush()
+            comm.Abort(1)
+        time.sleep(0.001)
+    _failed.discard(nodeid)

@@ -1,6 +1,8 @@
 # SPDX-License-Identifier: MIT
-"""A test that fails on one MPI rank only ends the 2-rank test run at once, with a non-zero exit
-and the failure's report, instead of leaving the other rank waiting in its next collective call."""
+"""A test that fails on one MPI rank only ends the 2-rank test run soon (after the conftest's
+agreement timeout), with a non-zero exit and the failure's report, instead of leaving the other
+rank waiting in its next collective call; a test that fails on every rank does not end the run:
+the later tests still run, so one run reports every failure."""
 
 import os
 import shutil
@@ -25,23 +27,47 @@ _TESTS = textwrap.dedent("""
         MPI.COMM_WORLD.bcast(1, root=0)
 """)
 
+_SYMMETRIC = textwrap.dedent("""
+    from mpi4py import MPI
 
-def test_one_rank_failure_aborts_the_job_quickly(tmp_path):
+    def test_fails_on_every_rank():
+        total = MPI.COMM_WORLD.allreduce(1)
+        assert total == 0, "deliberate failure on every rank"
+
+    def test_runs_after_it():
+        assert MPI.COMM_WORLD.allreduce(1) == MPI.COMM_WORLD.size
+""")
+
+
+def _run_two_ranks(tmp_path, tests: str) -> tuple[int, str, float]:
     mpirun = shutil.which("mpirun")
     assert mpirun is not None, "mpirun (Open MPI) is required; run scripts/setup.sh"
     shutil.copy(Path(__file__).with_name("conftest.py"), tmp_path / "conftest.py")
-    (tmp_path / "test_one_rank.py").write_text(_TESTS)
+    (tmp_path / "test_two_ranks.py").write_text(tests)
     env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
     env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
+    env["VPCONTACT_TEST_AGREE_SECONDS"] = "5"
     root = ["--allow-run-as-root"] if os.geteuid() == 0 else []
     start = time.perf_counter()
     done = subprocess.run(
-        [mpirun, *root, "-n", "2", sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
-         "--rootdir", str(tmp_path), str(tmp_path / "test_one_rank.py")],
+        [mpirun, *root, "-n", "2", sys.executable, "-m", "pytest", "-q", "--color=no",
+         "-p", "no:cacheprovider", "--rootdir", str(tmp_path), str(tmp_path / "test_two_ranks.py")],
         cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
-    elapsed = time.perf_counter() - start
-    output = done.stdout + done.stderr
-    assert done.returncode != 0, output
+    return done.returncode, done.stdout + done.stderr, time.perf_counter() - start
+
+
+def test_one_rank_failure_aborts_the_job_quickly(tmp_path):
+    code, output, elapsed = _run_two_ranks(tmp_path, _TESTS)
+    assert code != 0, output
     assert "test_fails_on_rank_1_only failed (call)" in output, output
     assert "deliberate failure" in output, output
-    assert elapsed < 120, f"the job took {elapsed:.0f} s to end"
+    assert "aborting the MPI job" in output, output
+    assert elapsed < 60, f"the job took {elapsed:.0f} s to end"
+
+
+def test_a_failure_on_every_rank_lets_the_later_tests_run(tmp_path):
+    code, output, _ = _run_two_ranks(tmp_path, _SYMMETRIC)
+    assert code != 0, output
+    assert output.count("test_fails_on_every_rank failed (call)") == 2, output
+    assert "aborting" not in output, output
+    assert output.count("1 failed, 1 passed") == 2, output
