@@ -37,6 +37,7 @@ from contextlib import contextmanager
 from typing import Callable, Optional
 
 import numpy as np
+from mpi4py import MPI
 from petsc4py import PETSc
 
 _KSP_REASON = PETSc.KSP.ConvergedReason
@@ -257,10 +258,11 @@ class LaggedDirectSolve(_ReducedSolve):
         self._factored = self._factorize()
         if self._factored:
             self.substitute(b, x)
-        if not self._factored or not np.all(np.isfinite(x.getArray(readonly=True))):
+            finite = bool(np.all(np.isfinite(x.getArray(readonly=True))))
+            self._factored = x.getComm().tompi4py().allreduce(finite, op=MPI.LAND)
+        if not self._factored:
             # (a factorization PETSc flags as failed makes the substitution write inf: SNES
             # must see a failed linear solve, not a line search on an infinite direction)
-            self._factored = False
             ksp.setConvergedReason(_KSP_REASON.DIVERGED_PC_FAILED)
             return
         ksp.setIterationNumber(1)
