@@ -1,0 +1,141 @@
+# SPDX-License-Identifier: MIT
+"""Benchmark (a diagnosis): which part of the mixed formulation's field split loses iterations on
+a flowing viscoplastic contact step.
+
+The paper's 3-D test (3n×n×n cells, Taylor–Hood, its data, iterative solver) is run to ``--t0``
+with k = 0.02, then one step of k = 0.01 begins. The second reduced system SNES VI solves in that
+step is captured and solved again by GMRES (rtol 1e-4 and 1e-8, as the VI's lagged solver does)
+with each part of the field split swapped for its exact counterpart:
+
+* ``as_used``: one p-multigrid cycle on the displacement block A, three Chebyshev–Jacobi sweeps
+  on the weighted pressure mass S_p (vpcontact's solver);
+* ``exact_A``: A factorized (MUMPS), S_p;
+* ``formed_schur``: one p-multigrid cycle on A, and the Schur complement C − B Ã⁻¹ Bᵀ of that
+  cycle Ã formed column by column and factorized (far too dear to use: a diagnosis);
+* ``exact_both``: A factorized and the Schur complement of A formed and factorized.
+
+    .venv/bin/python bench/field_split_parts.py [--n 4 8] [--scheme linearized] [--t0 0.06]
+        [--sigma-y inf]   # an elastic body, for comparison
+
+writes bench/results/field_split_parts_<scheme>_t<t0>.json (``--out``). Serial only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from benchlib import machine, save  # noqa: E402
+
+from vpcontact.paper import signorini as paper  # noqa: E402
+from vpcontact.solver import StepControl, advance  # noqa: E402
+from vpcontact.solver import linear as linear_solvers  # noqa: E402
+from vpcontact.solver import vi_linear  # noqa: E402
+
+#: the exact counterparts: (A by MUMPS, Schur complement formed) per variant
+VARIANTS = {"as_used": (False, False), "exact_A": (True, False),
+            "formed_schur": (False, True), "exact_both": (True, True)}
+
+
+def _inner(solver, block, matrix, exact_a: bool, formed: bool, name: str) -> PETSc.KSP:
+    """The field split of vpcontact's lagged VI solver on ``matrix``, with the swaps."""
+    prefix = solver.prefix + f"parts_{name}_"
+    options = linear_solvers.lagged_options(True)
+    if exact_a:
+        options.update({"fieldsplit_u_pc_type": "lu",
+                        "fieldsplit_u_pc_factor_mat_solver_type": "mumps"})
+    if formed:
+        options.update({"fieldsplit_p_ksp_type": "preonly", "fieldsplit_p_pc_type": "lu"})
+    ksp = PETSc.KSP().create(MPI.COMM_WORLD)
+    ksp.setOptionsPrefix(prefix)
+    ksp.setType("preonly")
+    ksp.setOperators(matrix)
+    with vi_linear.options_in_database(prefix, options):
+        ksp.setFromOptions()
+        pc = ksp.getPC()
+        pc.setFieldSplitIS(("u", block.is_u), ("p", block.is_p))
+        if formed:
+            pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.FULL)
+        else:
+            pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, block.matrix)
+        ksp.setUp()
+    return ksp
+
+
+def measure(n: int, scheme: str, t0: float, sigma_y: float, variants) -> dict:
+    problem = paper.signorini_3d(3 * n, n, n, petsc_options={}, sigma_y=sigma_y,
+                                 mu_star=paper.MU_STAR, scheme=scheme, formulation="mixed",
+                                 degree=2, linear="iterative")
+    list(advance(problem, t0, StepControl(0.02)))
+    solver = problem.solver
+    block = solver._block
+    record = {"n": n, "unknowns": solver.unknowns}
+    solves = {"count": 0}
+    original = vi_linear.LaggedMultigrid.solve
+
+    def capture(lagged, ksp, b, x):
+        original(lagged, ksp, b, x)
+        solves["count"] += 1
+        if solves["count"] != 2:
+            return
+        reduced, _ = ksp.getOperators()
+        record["reduced_size"] = reduced.getSize()[0]
+        record["production_iterations"] = lagged.krylov.getIterationNumber()
+        kept = lagged.inner
+        for name in variants:
+            start = time.perf_counter()
+            lagged.inner = _inner(solver, block, lagged.matrix, *VARIANTS[name], name)
+            setup = time.perf_counter() - start
+            y = x.duplicate()
+            row = {"setup_seconds": setup}
+            for rtol in (1e-4, 1e-8):
+                y.set(0.0)
+                start = time.perf_counter()
+                converged = lagged._krylov(reduced, b, y, rtol, 0.0, 600)
+                row[f"iterations_rtol_{rtol:g}"] = lagged.krylov.getIterationNumber()
+                row[f"converged_rtol_{rtol:g}"] = bool(converged)
+                row[f"seconds_rtol_{rtol:g}"] = time.perf_counter() - start
+            record[name] = row
+            lagged.inner.destroy()
+            y.destroy()
+        lagged.inner = kept
+
+    vi_linear.LaggedMultigrid.solve = capture
+    try:
+        problem.step(0.01)
+    finally:
+        vi_linear.LaggedMultigrid.solve = original
+    return record
+
+
+def main(argv=None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--n", type=int, nargs="+", default=[4, 8])
+    parser.add_argument("--scheme", default="linearized", choices=["implicit", "linearized"])
+    parser.add_argument("--t0", type=float, default=0.06)
+    parser.add_argument("--sigma-y", type=float, default=paper.SIGMA_Y)
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    parser.add_argument("--out")
+    args = parser.parse_args(argv)
+    comm = MPI.COMM_WORLD
+    if comm.size != 1:
+        raise SystemExit("field_split_parts.py runs serially")
+    records = [measure(n, args.scheme, args.t0, args.sigma_y, args.variants) for n in args.n]
+    body = "elastic" if math.isinf(args.sigma_y) else "flowing"
+    out = args.out or str(Path(__file__).parent / "results"
+                          / f"field_split_parts_{args.scheme}_{body}_t{args.t0:g}.json")
+    save({"benchmark": "field_split_parts", "machine": machine(comm), "scheme": args.scheme,
+          "t0": args.t0, "sigma_y": None if math.isinf(args.sigma_y) else args.sigma_y,
+          "records": records}, out, comm)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
