@@ -299,10 +299,7 @@ class LaggedDirectSolve(_ReducedSolve):
                 return False
             self.options["mat_mumps_icntl_14"] = min(2 * max(increase, 20),
                                                      self.MUMPS_MAX_WORKSPACE_INCREASE)
-            kind = pc.getType()
-            pc.reset()  # a new analysis, with the larger work arrays
-            pc.setType(kind)
-            pc.setFactorSolverType("mumps")
+            self._new_factor(pc.getType())  # a new analysis, with the larger work arrays
             self.inner.setOperators(self.matrix)
 
     def _choose_factorization(self) -> None:
@@ -311,13 +308,18 @@ class LaggedDirectSolve(_ReducedSolve):
         implicit update's metric is not proportional to E⁻¹ there), and a user law need not
         be: checked at every factorization."""
         kind = "cholesky" if self._matrix_is_symmetric() else "lu"
-        pc = self.inner.getPC()
-        if pc.getType() != kind:
-            solver = pc.getFactorSolverType()
-            pc.reset()
-            pc.setType(kind)
-            pc.setFactorSolverType(solver)
+        if self.inner.getPC().getType() != kind:
+            self._new_factor(kind)
             self.factorization = kind
+
+    def _new_factor(self, kind: str) -> None:
+        """Drop the inner PC's factors and analysis: its next set-up analyses and factorizes
+        afresh as ``kind`` ("lu" or "cholesky"), with the same solver package."""
+        pc = self.inner.getPC()
+        solver = pc.getFactorSolverType()
+        pc.reset()
+        pc.setType(kind)
+        pc.setFactorSolverType(solver)
 
 
 class LaggedMultigrid(_ReducedSolve):
