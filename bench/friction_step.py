@@ -5,14 +5,15 @@ Target (issue "Friction"): a frictional step costs at most 1.5× the frictionles
 problem. The problem is the test's block (tests/test_friction.py) on a finer mesh: an elastic
 block (plane strain, E = 1000, ν = 0.3) [0, 1] × [0, 0.25] pressed onto a normal-compliance
 foundation (μ = 1e-3) by its top (u_2 = −0.002 over t ≤ 0.5), then dragged (u_1 = 0.02 (t − 0.5));
-with Coulomb friction (𝔣 = 0.3) and without, k = 0.05. Timed separately: the press (t ≤ 0.5,
+with Coulomb friction (𝔣 = 0.3) and without, k = 0.05; with ``--floor rigid`` the foundation is
+rigid instead (Signorini: SNES VI, nodal friction). Timed separately: the press (t ≤ 0.5,
 where frictional nodes switch between stick and slip) and the drag (t ∈ [0.5, 1]; without
 friction the block then translates rigidly, which the linear predictor gets exactly) — wall time
 and Newton iterations per step.
 
-    .venv/bin/python bench/friction_step.py [--cells 256 64]
+    .venv/bin/python bench/friction_step.py [--cells 256 64] [--floor compliant|rigid]
 
-writes bench/results/friction_step.json (and prints it).
+writes bench/results/friction_step.json (friction_step_rigid.json for a rigid floor).
 """
 
 from __future__ import annotations
@@ -29,12 +30,12 @@ from mpi4py import MPI
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from benchlib import machine, save  # noqa: E402
 
-from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain  # noqa: E402
+from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain, Signorini  # noqa: E402
 from vpcontact.model.friction import Friction  # noqa: E402
 from vpcontact.solver import Dirichlet, QuasistaticProblem, StepControl, advance, tag_facets  # noqa: E402
 
 
-def run(cells, friction) -> dict:
+def run(cells, friction, floor: str = "compliant") -> dict:
     comm = MPI.COMM_WORLD
     msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], list(cells))
     tags = tag_facets(msh, {1: lambda x: np.isclose(x[1], 0.25),
@@ -49,7 +50,8 @@ def run(cells, friction) -> dict:
     problem = QuasistaticProblem(
         msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
         dirichlet=[Dirichlet(1, (ux, uy), "top")],
-        contact=NormalCompliance(2, mu=1e-3, friction=friction))
+        contact=(NormalCompliance(2, mu=1e-3, friction=friction) if floor == "compliant" else
+                 Signorini(2, obstacle=lambda x: x[1], max_distance=1.0, friction=friction)))
     phases = {}
     for name, t_end in (("press", 0.5), ("drag", 1.0)):
         comm.barrier()
@@ -67,20 +69,24 @@ def run(cells, friction) -> dict:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cells", type=int, nargs=2, default=[256, 64])
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "friction_step.json"))
+    parser.add_argument("--floor", default="compliant", choices=["compliant", "rigid"])
+    parser.add_argument("--out")
     args = parser.parse_args(argv)
     comm = MPI.COMM_WORLD
-    run((8, 2), None)  # warm-up: JIT of the forms
-    run((8, 2), Friction("coulomb", coefficient=0.3))
-    frictionless = run(args.cells, None)
-    coulomb = run(args.cells, Friction("coulomb", coefficient=0.3))
+    run((8, 2), None, args.floor)  # warm-up: JIT of the forms
+    run((8, 2), Friction("coulomb", coefficient=0.3), args.floor)
+    frictionless = run(args.cells, None, args.floor)
+    coulomb = run(args.cells, Friction("coulomb", coefficient=0.3), args.floor)
+    name = "friction_step.json" if args.floor == "compliant" else f"friction_step_{args.floor}.json"
+    out = args.out or str(Path(__file__).parent / "results" / name)
     result = {"benchmark": "friction_step", "machine": machine(comm), "cells": args.cells,
+              "floor": args.floor,
               "frictionless": frictionless, "coulomb": coulomb,
               "cost_ratio": {phase: coulomb[phase]["seconds_per_step"]
                              / frictionless[phase]["seconds_per_step"]
                              for phase in ("press", "drag")},
               "target_cost_ratio": 1.5}
-    save(result, args.out, comm)
+    save(result, out, comm)
     return 0
 
 

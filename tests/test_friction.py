@@ -302,12 +302,18 @@ def _signorini_block(friction, floor_motion=None, drag=0.02, drag_path=None, **d
 def test_signorini_full_slip(kind):
     """The block pressed onto a rigid floor (Signorini, nodal friction in the contact frames),
     then dragged: tangential force = 0.3 × normal force (Coulomb) or = 2 × the contact length
-    (Tresca) to 1e-8 while it slides; at most 6 Newton iterations per step."""
+    (Tresca) to 1e-8 while it slides; at most 6 Newton iterations per step. With Coulomb, the
+    pressing steps after the first and the steady sliding ones are linear (the stick/slip
+    pattern no longer changes): the extrapolated guess solves them, with no Newton iteration
+    (measured 4, 0, 0, 0, 0, 5, 4, 3, 0, 0; from a sticking guess they took 3 each)."""
     friction = (Friction("coulomb", coefficient=0.3) if kind == "coulomb"
                 else Friction("tresca", threshold=2.0))
     problem = _signorini_block(friction)
     for step in advance(problem, 1.0, StepControl(0.1)):
         assert step.newton_iterations <= 6, step
+        steady = (0.2 - 1e-9 < step.time < 0.5 + 1e-9) or step.time > 0.9 - 1e-9
+        if kind == "coulomb" and steady:
+            assert step.newton_iterations == 0, step
         if step.time >= 0.7 - 1e-9:
             _, force = problem.support_forces()
             expected = 0.3 * force[1] if kind == "coulomb" else 2.0 * 1.0
@@ -331,21 +337,20 @@ def _on_displacement_unknowns_only(problem) -> bool:
     return MPI.COMM_WORLD.allreduce(inside, op=MPI.LAND)
 
 
-@pytest.mark.parametrize("discretization, max_its", [({"degree": 2}, 6),
-                                                     ({"formulation": "mixed"}, 8)],
+@pytest.mark.parametrize("discretization", [{"degree": 2}, {"formulation": "mixed"}],
                          ids=["P2", "mixed"])
-def test_signorini_full_slip_beyond_p1(discretization, max_its):
+def test_signorini_full_slip_beyond_p1(discretization):
     """Coulomb on a rigid floor with P2 displacements, and with the mixed (Taylor–Hood u, p)
     formulation: while the block slides the tangential force is 0.3 × the normal one to 1e-8
     (measured 1e-15 with both); the HRZ areas of the bottom's nodes add up to its length;
-    friction touches displacement unknowns only; Newton iterations per step ≤ 6 (P2) and ≤ 8
-    (mixed: measured 4, 0, 0, 0, 0, 8, 1, 1, 0, 0)."""
+    friction touches displacement unknowns only; Newton iterations per step ≤ 6 (measured
+    5, 0, 0, 0, 0, 6, 3, 4, 0, 0 and 4, 0, 0, 0, 0, 5, 3, 4, 0, 0)."""
     problem = _signorini_block(Friction("coulomb", coefficient=0.3), **discretization)
     assert problem.formulation == discretization.get("formulation", "displacement")
     assert problem.V.ufl_element().degree() == 2
     sliding = 0
     for step in advance(problem, 1.0, StepControl(0.1)):
-        assert step.newton_iterations <= max_its, step
+        assert step.newton_iterations <= 6, step
         if step.time >= 0.7 - 1e-9:
             _, force = problem.support_forces()
             assert -force[0] == pytest.approx(0.3 * force[1], rel=1e-8), force
@@ -748,7 +753,7 @@ def test_a_floor_sliding_from_the_start_drags_the_block_it_is_pressed_onto():
     problem = _signorini_block(Friction("coulomb", coefficient=0.3),
                                floor_motion=lambda t: np.array([-0.02 * t, 0.0, 0.0]))
     for step in advance(problem, 1.0, StepControl(0.1)):
-        assert step.newton_iterations <= 8, step
+        assert step.newton_iterations <= 6, step  # (measured 3, 0, 0, …, 3, 0, …)
         if step.time >= 0.5 - 1e-9:
             _, force = problem.support_forces()
             assert -force[0] == pytest.approx(0.3 * force[1], rel=1e-8), force
@@ -771,15 +776,15 @@ def test_friction_on_a_deforming_obstacle_is_refused(shared_tmp_path, capsys):
 def test_3d_block_dragged_diagonally_on_a_rigid_floor_slides_against_the_drag(discretization):
     """3-D on a rigid floor (Signorini, nodal friction with two tangential unknowns per node): a
     block dragged along (1, 2, 0)/√5 slides with every contact node slipping, and its tangential
-    force tends to 𝔣 × the normal one along −(1, 2, 0)/√5 (below); at most 8 Newton iterations
-    per step (measured 5–6)."""
+    force tends to 𝔣 × the normal one along −(1, 2, 0)/√5 (below); at most 6 Newton iterations
+    per step (measured 5, 0, 0, 0, 0, 5, 5, … with P1 and 6, 0, 0, 0, 0, 6, 6, … mixed)."""
     comm = MPI.COMM_WORLD
     floor = Signorini(2, obstacle=lambda x: x[2], max_distance=1.0,
                       friction=Friction("coulomb", coefficient=0.4))
     problem, e = _dragged_diagonally_3d(floor, **discretization)
     errors = []
     for step in advance(problem, 1.0, StepControl(0.1)):
-        assert step.newton_iterations <= 8, step
+        assert step.newton_iterations <= 6, step
         last = problem.contacts[0].friction.last
         touching = last["lam"] > 0
         if step.time > 0.5 + 1e-9 and comm.allreduce(bool(np.all(last["slips"][touching])),

@@ -33,8 +33,13 @@ it landed. A slider's tip sweeping over the nodes ahead of it drags them with it
 force; a cylinder pressed straight into a block gives its landing nodes none (measured there:
 19 Newton iterations instead of 24 and a step cut, README).
 
-Reversals: the step's initial guess sticks (:meth:`NodalFriction.predict`), so a node that slid
-in the last step starts on the cone's edge with no slip yet. Its return mapping then says slip,
+A step's guess: the problem's, which extrapolates the last steps' motion, if it already solves
+the step (a body pressed or dragged steadily: those steps are linear once the stick/slip pattern
+stays, and take no Newton iteration); otherwise SNES starts from a sticking guess
+(:meth:`NodalFriction.fallback`; from it alone, the steady steps took 3–5 iterations each).
+
+Reversals: from the sticking guess a node that slid in the last step starts on the cone's edge
+with no slip yet. Its return mapping then says slip,
 whose 2-D tangent is zero: Newton is free to move the node any distance along the face. Where
 the load turns back, the node should stick, and Newton instead jumped it across the stick
 interval (2b/k wide) and cycled between slipping forward and back (a dragged block pulled back
@@ -245,20 +250,37 @@ class NodalFriction(NodalTerm):
         if "friction_last_force" in arrays:
             self.last = {k: np.array(arrays[f"friction_last_{k}"]) for k in self._LAST}
 
+    #: the extrapolated guess is kept only where it already solves the step (see :meth:`predict`)
+    first_try = 0
+
+    def _pressed(self) -> np.ndarray:
+        """The nodes pressed at the last step (at the start: touching the obstacle)."""
+        return self.touching if self.last is None else self.last["lam"] > 0
+
     def predict(self, x: PETSc.Vec) -> None:
-        """The step's initial guess sticks: the tangential unknowns of the nodes in contact at
-        the last step where the obstacle has taken them (no slip). Newton then starts on the
-        stick branch with its stiffness k and leaves it where the trial force leaves the cone.
-        From an extrapolated guess instead (the predictor continues the last step's motion), a
-        step that reverses the drag after sliding starts with every node slipping forward, and
-        with the stick interval only 2b/k wide Newton jumps across it, slipping forward and
-        back in turn (measured: no convergence in 50 iterations with a 1e−5 reversal). The
-        first step sticks the nodes touching at the start: a floor sliding from t = 0 under a
-        block pressed onto it had every node's bound 𝔣λ near zero and Newton slipping either way
-        in turn (no convergence at any step size)."""
+        """The step's first guess is the problem's, which extrapolates the last steps' motion;
+        SNES takes it only if it already solves the step (``first_try = 0``: a body pressed or
+        dragged steadily, whose steps are then linear, needs no Newton iteration), and otherwise
+        starts again sticking (:meth:`fallback`)."""
+        self._predicted[:] = np.nan
+
+    def has_fallback(self) -> bool:
+        """A sticking guess exists where nodes were pressed at the last step (collective)."""
+        return self.comm.allreduce(bool(np.any(self.free & self._pressed()[:, None])),
+                                   op=MPI.LOR)
+
+    def fallback(self, x: PETSc.Vec) -> None:
+        """The sticking guess: the tangential unknowns of the nodes pressed at the last step
+        where the obstacle has taken them (no slip). Newton then starts on the stick branch with
+        its stiffness k and leaves it where the trial force leaves the cone. From the
+        extrapolated guess instead, a step that reverses the drag after sliding starts with
+        every node slipping forward, and with the stick interval only 2b/k wide Newton jumps
+        across it, slipping forward and back in turn (measured: no convergence in 50 iterations
+        with a 1e−5 reversal). The first step sticks the nodes touching at the start: a floor
+        sliding from t = 0 under a block pressed onto it had every node's bound 𝔣λ near zero
+        and Newton slipping either way in turn (no convergence at any step size)."""
         values = x.getArray()
-        pressed = self.touching if self.last is None else self.last["lam"] > 0
-        held = self.free & pressed[:, None]
+        held = self.free & self._pressed()[:, None]
         stuck = self.x_old + self._shift() / self.scale
         values[self.tangential] = np.where(held, stuck, values[self.tangential])
         self._predicted = values[self.tangential].copy()

@@ -103,6 +103,10 @@ class NodalTerm:
     def prepare_jacobian(self, x: PETSc.Vec) -> None:
         """Before the UFL Jacobian is assembled at x (nothing unless a term says so)."""
 
+    #: Newton iterations SNES may take from the step's guess before it starts again from
+    #: :meth:`fallback`'s (None: the step solver's ``FALLBACK_AFTER``)
+    first_try: Optional[int] = None
+
     def has_fallback(self) -> bool:
         """Whether :meth:`fallback` has another initial guess for this step (collective; see
         :meth:`~vpcontact.solver.step_solver.StepSolver._run_with_fallback`)."""

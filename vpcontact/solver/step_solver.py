@@ -622,13 +622,18 @@ class StepSolver:
     def _run_with_fallback(self) -> tuple[int, int]:
         """SNES from the guess; where a nodal term has another guess (friction on a compliant
         part: sticking, see :class:`~vpcontact.model.friction.StickingGuess`), the first try
-        stops after :data:`FALLBACK_AFTER` iterations and, unconverged, SNES starts again from
-        the other guess. (Iterations of both count.)"""
-        if not any([term.has_fallback() for term in self._nodal]):  # (collective: no short cut)
+        stops after :data:`FALLBACK_AFTER` iterations (or the term's ``first_try``: 0 for
+        friction on a Signorini part, whose extrapolated guess is kept only where it already
+        solves the step) and, unconverged, SNES starts again from the other guess. (Iterations
+        of both count.)"""
+        having = [term for term in self._nodal if term.has_fallback()]  # (collective: no
+        if not having:                                                   # short cut)
             return self._run(self.snes)
+        tries = [getattr(term, "first_try", None) for term in having]
+        first_try = min(FALLBACK_AFTER if n is None else n for n in tries)
         guess = self._x.copy()
         rtol, atol, stol, max_it = self.snes.getTolerances()
-        self.snes.setTolerances(max_it=min(FALLBACK_AFTER, max_it))
+        self.snes.setTolerances(max_it=min(first_try, max_it))
         try:
             reason, first = self._run(self.snes)
         finally:
