@@ -131,13 +131,19 @@ def friction_terms(friction: Friction, u, u_old, t_old, du, v, normal, pressure,
     return -ufl.dot(traction, v) * ds, -ufl.dot(dtraction, v) * ds
 
 
+#: Newton iterations from the extrapolated guess before a step on a compliant part with friction
+#: starts again sticking (:class:`StickingGuess`): the issue "Friction" asks for at most 6 per
+#: step.
+FIRST_TRY = 5
+
+
 class StickingGuess:
     """A step's second guess on a normal-compliance part with friction: sticking (a nodal term of
     the step solver: hooks ``bind``, ``predict``, ``has_fallback``, ``fallback``,
     ``prepare_jacobian``).
 
     SNES starts from the problem's guess, which extrapolates the last steps' motion; where that
-    does not converge within :data:`~vpcontact.solver.step_solver.FALLBACK_AFTER` iterations it
+    does not converge within :data:`FIRST_TRY` iterations it
     starts again from this one: the tangential unknowns of the nodes pressed at the last step
     where that step left them (the normal ones keep the extrapolation), and the Jacobian at that
     guess on the stick branch wherever the face is pressed (``stick_first``, a constant of the UFL
@@ -163,6 +169,8 @@ class StickingGuess:
         stick_first: the constant of its friction Jacobian.
     """
 
+    first_try = FIRST_TRY
+
     def __init__(self, part, stick_first):
         self.part = part
         self.comm = part.u.function_space.mesh.comm
@@ -182,7 +190,7 @@ class StickingGuess:
         self.free = ~np.isin(self.u_rows, dirichlet_dofs)
         self.rows = displacement_positions(layout)[0][self.u_rows].astype(np.int32)
 
-    def predict(self, x) -> None:
+    def predict(self, x, first_try: int) -> None:
         """The problem's (extrapolated) guess is tried first: nothing to change."""
         self._guess = None
 

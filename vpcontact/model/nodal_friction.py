@@ -257,12 +257,15 @@ class NodalFriction(NodalTerm):
         """The nodes pressed at the last step (at the start: touching the obstacle)."""
         return self.touching if self.last is None else self.last["lam"] > 0
 
-    def predict(self, x: PETSc.Vec) -> None:
+    def predict(self, x: PETSc.Vec, first_try: int) -> None:
         """The step's first guess is the problem's, which extrapolates the last steps' motion;
         SNES takes it only if it already solves the step (``first_try = 0``: a body pressed or
         dragged steadily, whose steps are then linear, needs no Newton iteration), and otherwise
-        starts again sticking (:meth:`fallback`)."""
+        starts again sticking (:meth:`fallback`). Where another term asks for a longer first
+        try (friction on a compliant part in the same scene), this part sticks from the start."""
         self._predicted[:] = np.nan
+        if first_try > 0:
+            self.fallback(x)
 
     def has_fallback(self) -> bool:
         """A sticking guess exists where nodes were pressed at the last step (collective)."""

@@ -97,14 +97,16 @@ class NodalTerm:
         the values where λ_i > 0."""
         return A.getRow(A.getOwnershipRange()[0] + int(self.slots[i]))
 
-    def predict(self, x: PETSc.Vec) -> None:
-        """The step's initial guess (nothing to change unless a term says so)."""
+    def predict(self, x: PETSc.Vec, first_try: int) -> None:
+        """The step's initial guess, for a first try of ``first_try`` Newton iterations
+        (nothing to change unless a term says so)."""
 
     def prepare_jacobian(self, x: PETSc.Vec) -> None:
         """Before the UFL Jacobian is assembled at x (nothing unless a term says so)."""
 
     #: Newton iterations SNES may take from the step's guess before it starts again from
-    #: :meth:`fallback`'s (None: the step solver's ``FALLBACK_AFTER``)
+    #: :meth:`fallback`'s (None: the term has no other guess; the step solver takes the
+    #: longest first try its terms ask for)
     first_try: Optional[int] = None
 
     def has_fallback(self) -> bool:

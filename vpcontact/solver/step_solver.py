@@ -32,12 +32,6 @@ _counter = itertools.count()
 #: A Newton iteration "stagnates" while ||F|| stays above this many times its best value in the
 #: step (see :meth:`StepSolver._converged`).
 STAGNATION_FACTOR = 10.0
-#: Newton iterations allowed from the predicted guess before SNES starts again from a nodal
-#: term's other guess (:meth:`StepSolver._run_with_fallback`): the issue "Friction" asks for at
-#: most 6 per step.
-FALLBACK_AFTER = 5
-
-
 class StepSolver:
     """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
 
@@ -101,6 +95,11 @@ class StepSolver:
         self._refresh = refresh
         self._P = variables
         self._nodal = list(nodal_terms)
+        #: Newton iterations SNES takes from the step's guess before the nodal terms' other
+        #: guess (:meth:`_run_with_fallback`): the longest first try a term with another guess
+        #: asks for (its ``first_try``; None: it has none)
+        self._first_try = max([term.first_try for term in self._nodal
+                               if getattr(term, "first_try", None) is not None] or [0])
         driven = variables is not None and not variables.square
         self._b = variables.create_vector() if driven else fields.create_vector()
         self._xp = fields.physical_vector()  # the physical unknowns (u's own vector for u alone)
@@ -579,8 +578,8 @@ class StepSolver:
             self._P.to_snes(xs, self._x)
         if self._bounds is not None:
             self._snap_to_bounds(self._x)
-        for term in self._nodal:  # (friction: the guess sticks where the nodes touched)
-            term.predict(self._x)
+        for term in self._nodal:  # (each term's first guess, for a first try this long)
+            term.predict(self._x, self._first_try)
         self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
         start = _time.perf_counter()  # (kernel and assembly outside SNES count as SNES work,
         self._round_off_scale = max(self._force_scale, self._free_residual_norm())
@@ -622,18 +621,15 @@ class StepSolver:
     def _run_with_fallback(self) -> tuple[int, int]:
         """SNES from the guess; where a nodal term has another guess (friction on a compliant
         part: sticking, see :class:`~vpcontact.model.friction.StickingGuess`), the first try
-        stops after :data:`FALLBACK_AFTER` iterations (or the term's ``first_try``: 0 for
-        friction on a Signorini part, whose extrapolated guess is kept only where it already
-        solves the step) and, unconverged, SNES starts again from the other guess. (Iterations
-        of both count.)"""
-        having = [term for term in self._nodal if term.has_fallback()]  # (collective: no
-        if not having:                                                   # short cut)
+        stops after the longest ``first_try`` of the terms (5 for friction on a compliant part,
+        :data:`~vpcontact.model.friction.FIRST_TRY`; 0 for friction on a Signorini part, whose
+        extrapolated guess is kept only where it already solves the step) and, unconverged,
+        SNES starts again from the other guess. (Iterations of both count.)"""
+        if not any([term.has_fallback() for term in self._nodal]):  # (collective: no short cut)
             return self._run(self.snes)
-        tries = [getattr(term, "first_try", None) for term in having]
-        first_try = min(FALLBACK_AFTER if n is None else n for n in tries)
         guess = self._x.copy()
         rtol, atol, stol, max_it = self.snes.getTolerances()
-        self.snes.setTolerances(max_it=min(first_try, max_it))
+        self.snes.setTolerances(max_it=min(self._first_try, max_it))
         try:
             reason, first = self._run(self.snes)
         finally:
