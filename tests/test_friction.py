@@ -484,6 +484,42 @@ def test_on_a_compliant_floor_a_reversed_drag_sticks_again_within_six_newton_ite
     assert max(its) <= 6, its
 
 
+def test_a_clamped_block_pressed_onto_a_compliant_floor_with_friction_starts():
+    """A block clamped at its left end and pressed down by its top onto a compliant floor with
+    Coulomb friction. From the extrapolated guess, the onset step's Newton iteration cycled
+    between two iterates (the far end's nodes slipping one way, then the other, across the stick
+    interval) at every step size, so the run could not start. At the onset the sticking guess
+    now starts from the first try's pressed nodes (friction.StickingGuess.fallback): every step
+    converges with no cut (measured 15, 1, 1, 1, 1), and every node's traction is within its
+    cone, some nodes slipping and some sticking."""
+    comm = MPI.COMM_WORLD
+    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [32, 8])
+    tags = tag_facets(msh, {1: lambda x: np.isclose(x[0], 0.0), 2: lambda x: np.isclose(x[1], 0.0),
+                            3: lambda x: np.isclose(x[1], 0.25)})
+
+    def zero(x, t):
+        return np.zeros(x.shape[1])
+
+    def down(x, t):
+        return np.full(x.shape[1], -0.004 * min(t / 0.5, 1.0))
+
+    problem = QuasistaticProblem(
+        msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
+        dirichlet=[Dirichlet(1, (zero, zero), "left"), Dirichlet(3, (zero, down), "top")],
+        contact=NormalCompliance(2, mu=1e-3, friction=Friction("coulomb", coefficient=0.3)))
+    its = [step.newton_iterations for step in advance(problem, 0.5, StepControl(0.1))]
+    assert len(its) == 5 and problem.solver.total_iterations == sum(its), its  # no step cut
+    assert its[0] <= 8 + 8 and max(its[1:]) <= 6, its
+    part = problem.contacts[0]
+    state = part.last_friction
+    pressure = -part.law.normal_stress(part.nodes.normal_displacement(part.u) - part.nodes.gap)
+    size = np.linalg.norm(state["traction"], axis=1)
+    assert np.all(size <= 0.3 * pressure * (1 + 1e-9) + 1e-14), (size, pressure)
+    slipping = comm.allreduce(int(state["slips"].sum()), op=MPI.SUM)
+    pressed = comm.allreduce(int((pressure > 0).sum()), op=MPI.SUM)
+    assert 0 < slipping < pressed, (slipping, pressed)
+
+
 def _turned_block(friction, angle: float):
     """The dragged block of :func:`_signorini_block` (Coulomb, pressed then dragged) with the
     mesh, the floor and the top's motion turned by ``angle`` about the origin."""

@@ -135,6 +135,10 @@ def friction_terms(friction: Friction, u, u_old, t_old, du, v, normal, pressure,
 #: starts again sticking (:class:`StickingGuess`): the issue "Friction" asks for at most 6 per
 #: step.
 FIRST_TRY = 5
+#: The same for a step that starts with no node pressed (the onset of contact), where the first
+#: try usually converges (the dragged block's first step: 6 iterations) and the sticking guess is
+#: only a rescue.
+ONSET_TRY = 8
 
 
 class StickingGuess:
@@ -169,8 +173,6 @@ class StickingGuess:
         stick_first: the constant of its friction Jacobian.
     """
 
-    first_try = FIRST_TRY
-
     def __init__(self, part, stick_first):
         self.part = part
         self.comm = part.u.function_space.mesh.comm
@@ -181,6 +183,7 @@ class StickingGuess:
         self.free = np.ones(self.rows.shape, dtype=bool)
         self.scale = 1.0
         self._guess: Optional[np.ndarray] = None
+        self._onset = False  # this step starts with no node pressed (see has_fallback)
 
     def bind(self, scale: float, dirichlet_dofs: np.ndarray, layout) -> None:
         """Place u's rows in SNES's vector (``layout.field_indices()``; SNES's u is u/scale);
@@ -194,22 +197,48 @@ class StickingGuess:
         """The problem's (extrapolated) guess is tried first: nothing to change."""
         self._guess = None
 
+    @property
+    def first_try(self) -> int:
+        """Newton iterations from the extrapolated guess before the sticking one (as of the
+        last :meth:`has_fallback`)."""
+        return ONSET_TRY if self._onset else FIRST_TRY
+
     def _held(self) -> np.ndarray:
         return self.free & self.part.pressed_at(self.part.u_old)[:, None]
 
+    def _touching(self) -> np.ndarray:
+        """The nodes whose gap u_old closes (to round-off)."""
+        cd = self.part.nodes
+        closed = cd.normal_displacement(self.part.u_old) - cd.gap
+        return closed >= -1e-12 * (1.0 + np.abs(cd.gap))
+
     def has_fallback(self) -> bool:
-        """A sticking guess exists where nodes were pressed at the last step (collective)."""
-        return self.comm.allreduce(bool(self._held().any()), op=MPI.LOR)
+        """A sticking guess exists where nodes were pressed at the last step, or, at the onset of
+        contact (none pressed), where they touch the foundation (collective)."""
+        pressed = self.comm.allreduce(bool(self._held().any()), op=MPI.LOR)
+        self._onset = not pressed and self.comm.allreduce(
+            bool((self.free & self._touching()[:, None]).any()), op=MPI.LOR)
+        return pressed or self._onset
 
     def fallback(self, x) -> None:
         """Stick the tangential unknowns of the nodes pressed at the last step (the part's
         u_old, restored with a checkpoint) in the guess x (SNES's vector); the Jacobian there
-        takes the stick branch."""
+        takes the stick branch.
+
+        At the onset of contact no node was pressed, and the guess presses none either (its
+        bound 𝔣p is 0, so the stick branch would not apply): the nodes the first try's last
+        iterate presses (the part's u) take their normal motion from it and stick
+        tangentially. (A block clamped at one end and pressed onto a frictional foundation
+        cycled between two iterates from the extrapolated guess, at every step size: Newton
+        jumped the far end's nodes across the stick interval, 2b/k_t wide, one way and back.)"""
         values = x.getArray()
         old = self.part.u_old.x.array[self.u_rows] / self.scale
-        guess = values[self.rows]
+        guess, held = values[self.rows], self._held()
+        if self._onset:
+            guess = self.part.u.x.array[self.u_rows] / self.scale
+            held = self.free & self.part.pressed_at(self.part.u)[:, None]
         along = np.einsum("ij,ij->i", guess - old, self.normals)[:, None] * self.normals
-        values[self.rows] = np.where(self._held(), old + along, guess)
+        values[self.rows] = np.where(held, old + along, values[self.rows])
         self._guess = values.copy()
 
     def prepare_jacobian(self, x) -> None:

@@ -95,9 +95,8 @@ class StepSolver:
         self._refresh = refresh
         self._P = variables
         self._nodal = list(nodal_terms)
-        #: Newton iterations SNES takes from the step's guess before the nodal terms' other
-        #: guess (:meth:`_run_with_fallback`): the longest first try a term with another guess
-        #: asks for (its ``first_try``; None: it has none)
+        #: the longest first try a term with another guess may ask for (its ``first_try``;
+        #: None: it has none), which :meth:`solve` tells the terms' ``predict``
         self._first_try = max([term.first_try for term in self._nodal
                                if getattr(term, "first_try", None) is not None] or [0])
         driven = variables is not None and not variables.square
@@ -621,15 +620,19 @@ class StepSolver:
     def _run_with_fallback(self) -> tuple[int, int]:
         """SNES from the guess; where a nodal term has another guess (friction on a compliant
         part: sticking, see :class:`~vpcontact.model.friction.StickingGuess`), the first try
-        stops after the longest ``first_try`` of the terms (5 for friction on a compliant part,
-        :data:`~vpcontact.model.friction.FIRST_TRY`; 0 for friction on a Signorini part, whose
-        extrapolated guess is kept only where it already solves the step) and, unconverged,
-        SNES starts again from the other guess. (Iterations of both count.)"""
-        if not any([term.has_fallback() for term in self._nodal]):  # (collective: no short cut)
+        stops after the longest ``first_try`` of the terms that have one this step (friction
+        on a compliant part: 5, :data:`~vpcontact.model.friction.FIRST_TRY`, or 8 at the onset
+        of contact; on a Signorini part 0: its extrapolated guess is kept only where it already
+        solves the step) and, unconverged, SNES starts again from the other guess. (Iterations
+        of both count.)"""
+        having = [term.has_fallback() for term in self._nodal]  # (collective: no short cut)
+        if not any(having):
             return self._run(self.snes)
+        first_try = max([term.first_try for term, has in zip(self._nodal, having)
+                         if has and term.first_try is not None] or [0])
         guess = self._x.copy()
         rtol, atol, stol, max_it = self.snes.getTolerances()
-        self.snes.setTolerances(max_it=min(self._first_try, max_it))
+        self.snes.setTolerances(max_it=min(first_try, max_it))
         try:
             reason, first = self._run(self.snes)
         finally:
