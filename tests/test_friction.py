@@ -530,6 +530,35 @@ def test_a_clamped_block_pressed_onto_a_compliant_floor_with_friction(press):
     assert 0 < slipping < pressed, (slipping, pressed)
 
 
+def test_friction_on_a_rigid_and_on_a_compliant_part_of_one_scene():
+    """A block clamped at its left end, pressed by a rigid plane with Coulomb friction
+    (Signorini, nodal friction) onto a compliant floor with Coulomb friction, then dragged by
+    the plane: the run completes; the parts ask for different line searches (``cp`` for the
+    rigid part's friction, ``l2`` for the compliant part's) and the problem takes ``cp``: 680
+    Newton iterations in all, cut steps included (1 145 with ``l2``). Open: the dragging steps
+    are still cut (22 steps for 10)."""
+    comm = MPI.COMM_WORLD
+    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [32, 8])
+    tags = tag_facets(msh, {1: lambda x: np.isclose(x[0], 0.0), 2: lambda x: np.isclose(x[1], 0.0),
+                            3: lambda x: np.isclose(x[1], 0.25)})
+
+    def zero(x, t):
+        return np.zeros(x.shape[1])
+
+    def motion(t):
+        return np.array([0.01 * max(t - 0.5, 0.0), -0.004 * min(t / 0.5, 1.0), 0.0])
+
+    top = Signorini(3, obstacle=lambda x: 0.25 - x[1], max_distance=1.0, translation=motion,
+                    friction=Friction("coulomb", coefficient=0.3))
+    floor = NormalCompliance(2, mu=1e-3, friction=Friction("coulomb", coefficient=0.3))
+    problem = QuasistaticProblem(msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
+                                 dirichlet=[Dirichlet(1, (zero, zero), "left")],
+                                 contact={"top": top, "floor": floor})
+    steps = list(advance(problem, 1.0, StepControl(0.1)))
+    assert steps[-1].time == pytest.approx(1.0)
+    assert problem.solver.total_iterations <= 800, problem.solver.total_iterations
+
+
 def _turned_block(friction, angle: float):
     """The dragged block of :func:`_signorini_block` (Coulomb, pressed then dragged) with the
     mesh, the floor and the top's motion turned by ``angle`` about the origin."""

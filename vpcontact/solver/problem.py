@@ -211,8 +211,16 @@ class QuasistaticProblem:
             # sets with full steps (the paper's 3-D test on 18×6×6 cells: three steps cut after
             # 50 iterations each); backtracking breaks the cycle (2–6 iterations per step).
             defaults["snes_linesearch_type"] = "bt"
+        searches = []
         for part in self.contacts:  # (a part's needs come first: friction's line search)
-            defaults.update(part.snes_defaults(law.linear_in_strain))
+            wants = part.snes_defaults(law.linear_in_strain)
+            searches.append(wants.get("snes_linesearch_type"))
+            defaults.update(wants)
+        if "cp" in searches:
+            # parts that disagree: the critical-point search that SNES VI's Coulomb friction
+            # needs (a block pressed by a rigid plane with friction onto a compliant floor with
+            # friction: 1 145 Newton iterations with l2, 680 with cp, in 29 / 22 steps)
+            defaults["snes_linesearch_type"] = "cp"
         normal = ufl.FacetNormal(mesh)
         terms = [t for t in (p.terms(self.u, du, v, normal, ds) for p in self.contacts) if t]
         # A body whose free rigid motions only its contacts hold (see vpcontact.solver.held).
