@@ -523,7 +523,8 @@ class SignoriniPart:
         threshold switches on with λ > 0, which ``cp`` crosses slowly (16 iterations where full
         steps take 3): it keeps PETSc's default."""
         if self.friction is not None and self.friction.friction.type == "coulomb":
-            return {"snes_type": "vinewtonrsls", "snes_linesearch_type": "cp"}
+            return {"snes_type": "vinewtonrsls", "snes_linesearch_type": "cp",
+                    "vpcontact_rescue_linesearch": "l2"}
         return {"snes_type": "vinewtonrsls"}
 
     def terms(self, u, du, v, normal, ds):

@@ -37,6 +37,9 @@ DEFAULT_OPTIONS = {
     # Options of the inner solver go under "lagged_" (e.g. lagged_pc_gamg_threshold).
     "vpcontact_vi_linear": "lagged_lu",
     "vpcontact_vi_lag_below": 1e-2,
+    # A line search to try a failed step once more with (at most RESCUE_ITERATIONS Newton
+    # iterations) before it is cut; empty: none. Friction on a Signorini part asks for "l2".
+    "vpcontact_rescue_linesearch": "",
 }
 if PETSc.Sys.hasExternalPackage("mumps"):
     DEFAULT_OPTIONS["pc_factor_mat_solver_type"] = "mumps"
