@@ -37,6 +37,8 @@ RESCUE_ITERATIONS = 15
 #: A Newton iteration "stagnates" while ||F|| stays above this many times its best value in the
 #: step (see :meth:`StepSolver._converged`).
 STAGNATION_FACTOR = 10.0
+
+
 class StepSolver:
     """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
 
@@ -678,8 +680,8 @@ class StepSolver:
         having = [term.has_fallback() for term in self._nodal]  # (collective: no short cut)
         if not any(having):
             return self._run(self.snes)
-        first_try = max([term.first_try for term, has in zip(self._nodal, having)
-                         if has and term.first_try is not None] or [0])
+        tries = [getattr(term, "first_try", None) for term, has in zip(self._nodal, having) if has]
+        first_try = max([n for n in tries if n is not None] or [0])
         guess = self._x.copy()
         rtol, atol, stol, max_it = self.snes.getTolerances()
         self.snes.setTolerances(max_it=min(first_try, max_it))
