@@ -484,6 +484,27 @@ def test_on_a_compliant_floor_a_reversed_drag_sticks_again_within_six_newton_ite
     assert max(its) <= 6, its
 
 
+def _clamped_block(contact: dict, dirichlet=()):
+    """An elastic block [0, 1] × [0, 0.25] (plane strain, 32×8 cells) clamped at its left end
+    (tag 1), with ``contact`` parts on its bottom (tag 2) and top (tag 3) and further Dirichlet
+    parts."""
+    msh = dmesh.create_rectangle(MPI.COMM_WORLD, [np.zeros(2), np.array([1.0, 0.25])], [32, 8])
+    tags = tag_facets(msh, {1: lambda x: np.isclose(x[0], 0.0), 2: lambda x: np.isclose(x[1], 0.0),
+                            3: lambda x: np.isclose(x[1], 0.25)})
+    clamp = Dirichlet(1, (_zero, _zero), "left")
+    return QuasistaticProblem(msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
+                              dirichlet=[clamp, *dirichlet], contact=contact)
+
+
+def _zero(x, t):
+    return np.zeros(x.shape[1])
+
+
+def _pressed_down(t):
+    """The top's descent: 0.004 over t ≤ 0.5, then held."""
+    return 0.004 * min(t / 0.5, 1.0)
+
+
 @pytest.mark.parametrize("press", ["prescribed", "rigid plane"])
 def test_a_clamped_block_pressed_onto_a_compliant_floor_with_friction(press):
     """A block clamped at its left end and pressed down by its top — a prescribed displacement,
@@ -498,25 +519,15 @@ def test_a_clamped_block_pressed_onto_a_compliant_floor_with_friction(press):
     1, 1, 1, 20, 1, 1, 1, 1), and every node's traction is within its cone, some nodes slipping
     and some sticking."""
     comm = MPI.COMM_WORLD
-    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [32, 8])
-    tags = tag_facets(msh, {1: lambda x: np.isclose(x[0], 0.0), 2: lambda x: np.isclose(x[1], 0.0),
-                            3: lambda x: np.isclose(x[1], 0.25)})
-
-    def zero(x, t):
-        return np.zeros(x.shape[1])
-
-    def depth(t):
-        return 0.004 * min(t / 0.5, 1.0)
-
     floor = NormalCompliance(2, mu=1e-3, friction=Friction("coulomb", coefficient=0.3))
-    dirichlet, contact = [Dirichlet(1, (zero, zero), "left")], {"floor": floor}
+    dirichlet, contact = [], {"floor": floor}
     if press == "prescribed":
-        dirichlet.append(Dirichlet(3, (zero, lambda x, t: np.full(x.shape[1], -depth(t))), "top"))
+        down = Dirichlet(3, (_zero, lambda x, t: np.full(x.shape[1], -_pressed_down(t))), "top")
+        dirichlet.append(down)
     else:
         contact["top"] = Signorini(3, obstacle=lambda x: 0.25 - x[1], max_distance=1.0,
-                                   translation=lambda t: np.array([0.0, -depth(t), 0.0]))
-    problem = QuasistaticProblem(msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
-                                 dirichlet=dirichlet, contact=contact)
+                                   translation=lambda t: np.array([0.0, -_pressed_down(t), 0.0]))
+    problem = _clamped_block(contact, dirichlet)
     its = [step.newton_iterations for step in advance(problem, 1.0, StepControl(0.1))]
     assert len(its) == 10 and problem.solver.total_iterations == sum(its), its  # no step cut
     assert max(its) <= 25, its
@@ -537,23 +548,13 @@ def test_friction_on_a_rigid_and_on_a_compliant_part_of_one_scene():
     rigid part's friction, ``l2`` for the compliant part's) and the problem takes ``cp``: 860
     Newton iterations in all, cut steps and their rescue tries included (680 without the rescue
     tries, 1 145 with ``l2``). Open: the dragging steps are still cut (22 steps for 10)."""
-    comm = MPI.COMM_WORLD
-    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [32, 8])
-    tags = tag_facets(msh, {1: lambda x: np.isclose(x[0], 0.0), 2: lambda x: np.isclose(x[1], 0.0),
-                            3: lambda x: np.isclose(x[1], 0.25)})
-
-    def zero(x, t):
-        return np.zeros(x.shape[1])
-
     def motion(t):
-        return np.array([0.01 * max(t - 0.5, 0.0), -0.004 * min(t / 0.5, 1.0), 0.0])
+        return np.array([0.01 * max(t - 0.5, 0.0), -_pressed_down(t), 0.0])
 
     top = Signorini(3, obstacle=lambda x: 0.25 - x[1], max_distance=1.0, translation=motion,
                     friction=Friction("coulomb", coefficient=0.3))
     floor = NormalCompliance(2, mu=1e-3, friction=Friction("coulomb", coefficient=0.3))
-    problem = QuasistaticProblem(msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
-                                 dirichlet=[Dirichlet(1, (zero, zero), "left")],
-                                 contact={"top": top, "floor": floor})
+    problem = _clamped_block({"top": top, "floor": floor})
     steps = list(advance(problem, 1.0, StepControl(0.1)))
     assert steps[-1].time == pytest.approx(1.0)
     assert problem.solver.total_iterations <= 950, problem.solver.total_iterations
@@ -567,21 +568,11 @@ def test_a_clamped_block_squeezed_onto_a_rigid_floor_with_friction_is_rescued():
     set changed): the run could not start. A failed step is now tried once more with the
     part's rescue line search (``l2``) before it is cut: 50 + 7 Newton iterations in the first
     step, none cut; both faces pressed, the forces in balance."""
-    comm = MPI.COMM_WORLD
-    msh = dmesh.create_rectangle(comm, [np.zeros(2), np.array([1.0, 0.25])], [32, 8])
-    tags = tag_facets(msh, {1: lambda x: np.isclose(x[0], 0.0), 2: lambda x: np.isclose(x[1], 0.0),
-                            3: lambda x: np.isclose(x[1], 0.25)})
-
-    def zero(x, t):
-        return np.zeros(x.shape[1])
-
     floor = Signorini(2, obstacle=lambda x: x[1], max_distance=1.0,
                       friction=Friction("coulomb", coefficient=0.3))
     plane = Signorini(3, obstacle=lambda x: 0.25 - x[1], max_distance=1.0,
-                      translation=lambda t: np.array([0.0, -0.004 * min(t / 0.5, 1.0), 0.0]))
-    problem = QuasistaticProblem(msh, tags, PlaneStrain(Elastic(Elasticity("3d_standard", 1e3, 0.3))),
-                                 dirichlet=[Dirichlet(1, (zero, zero), "left")],
-                                 contact={"floor": floor, "plane": plane})
+                      translation=lambda t: np.array([0.0, -_pressed_down(t), 0.0]))
+    problem = _clamped_block({"floor": floor, "plane": plane})
     its = [step.newton_iterations for step in advance(problem, 1.0, StepControl(0.1))]
     assert len(its) == 10 and problem.solver.total_iterations == sum(its), its  # no step cut
     assert its[0] <= 50 + 15 and max(its[1:]) <= 6, its
