@@ -39,6 +39,13 @@ RESCUE_ITERATIONS = 15
 STAGNATION_FACTOR = 10.0
 
 
+def _longest_first_try(terms) -> int:
+    """The longest ``first_try`` among nodal terms (None or absent: the term has no other
+    guess); 0 when none has one."""
+    tries = [getattr(term, "first_try", None) for term in terms]
+    return max([n for n in tries if n is not None] or [0])
+
+
 class StepSolver:
     """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
 
@@ -102,10 +109,9 @@ class StepSolver:
         self._refresh = refresh
         self._P = variables
         self._nodal = list(nodal_terms)
-        #: the longest first try a term with another guess may ask for (its ``first_try``;
-        #: None: it has none), which :meth:`solve` tells the terms' ``predict``
-        self._first_try = max([term.first_try for term in self._nodal
-                               if getattr(term, "first_try", None) is not None] or [0])
+        #: the longest first try a term with another guess may ask for, which :meth:`solve`
+        #: tells the terms' ``predict``
+        self._first_try = _longest_first_try(self._nodal)
         driven = variables is not None and not variables.square
         self._b = variables.create_vector() if driven else fields.create_vector()
         self._xp = fields.physical_vector()  # the physical unknowns (u's own vector for u alone)
@@ -589,9 +595,7 @@ class StepSolver:
             self._P.to_snes(xs, self._x)
         if self._bounds is not None:
             self._snap_to_bounds(self._x)
-        for term in self._nodal:  # (each term's first guess, for a first try this long)
-            term.predict(self._x, self._first_try)
-        self._loaded_valid = False  # new step: same u, but new dt, loads and committed state
+        self._predict()  # (new step: same u, but new dt, loads and committed state)
         start = _time.perf_counter()  # (kernel and assembly outside SNES count as SNES work,
         self._round_off_scale = max(self._force_scale, self._free_residual_norm())
         self.timings["snes"] += _time.perf_counter() - start  # so that the split adds up)
@@ -635,6 +639,13 @@ class StepSolver:
             self._record_active()
         return its
 
+    def _predict(self) -> None:
+        """The nodal terms' first guesses in self._x (for a first try of self._first_try
+        iterations); nothing loaded is current any more."""
+        for term in self._nodal:
+            term.predict(self._x, self._first_try)
+        self._loaded_valid = False
+
     def _rescue(self, guess: PETSc.Vec) -> tuple[int, int]:
         """The step once more from ``guess`` with the rescue line search
         (``vpcontact_rescue_linesearch``), before the caller cuts the step; the usual one is
@@ -643,9 +654,7 @@ class StepSolver:
         step size, ``l2`` converges in 7 iterations; ``l2`` alone cut the steps of other
         dragged blocks, README.)"""
         guess.copy(self._x)
-        for term in self._nodal:
-            term.predict(self._x, self._first_try)
-        self._loaded_valid = False
+        self._predict()
         self._set_line_search(self._rescue_line_search)
         rtol, atol, stol, max_it = self.snes.getTolerances()
         self.snes.setTolerances(max_it=min(RESCUE_ITERATIONS, max_it))
@@ -680,8 +689,7 @@ class StepSolver:
         having = [term.has_fallback() for term in self._nodal]  # (collective: no short cut)
         if not any(having):
             return self._run(self.snes)
-        tries = [getattr(term, "first_try", None) for term, has in zip(self._nodal, having) if has]
-        first_try = max([n for n in tries if n is not None] or [0])
+        first_try = _longest_first_try([t for t, has in zip(self._nodal, having) if has])
         guess = self._x.copy()
         rtol, atol, stol, max_it = self.snes.getTolerances()
         self.snes.setTolerances(max_it=min(first_try, max_it))
