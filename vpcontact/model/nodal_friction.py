@@ -73,6 +73,12 @@ from vpcontact.model.friction import STICK_STIFFNESS, return_mapping
 from vpcontact.model.nodal_areas import lumped_areas, nodal_facet_sizes
 from vpcontact.model.nodal_terms import ON_BOUND, NodalTerm
 
+#: Newton iterations a Coulomb step may take from the sticking guess before the Tresca
+#: predictor (:meth:`NodalFriction.freeze`) starts it again: above the 7–9 of the hardest steps
+#: that converge from it (the dragged block's first pressing step on 256×64 and 512×128
+#: cells), below the crawl of the ones that do not (12–36, README)
+SECOND_TRY = 10
+
 
 class NodalFriction(NodalTerm):
     """The friction of one Signorini part, as nodal terms of the step's SNES residual and
@@ -107,6 +113,7 @@ class NodalFriction(NodalTerm):
                        if getattr(part, "driven", False) else None)
         self._drive_row: Optional[int] = None   # δ's global row in SNES's vector
         self._d_old = 0.0                        # the obstacle's d at the last step
+        self._frozen: Optional[np.ndarray] = None  # the predictor's thresholds (see freeze)
 
     def bind(self, scale: float, dirichlet_dofs: np.ndarray, layout) -> None:
         """See :meth:`NodalTerm.bind`; also the row of a force-driven obstacle's unknown."""
@@ -132,6 +139,8 @@ class NodalFriction(NodalTerm):
         return self.force_old - self.stiffness[:, None] * slip, slip
 
     def _bound(self, lam: np.ndarray) -> np.ndarray:
+        if self._frozen is not None:  # the predictor's fixed thresholds, where pressed
+            return np.where(lam > 0, self._frozen, 0.0)
         if self.friction.type == "coulomb":
             return self.friction.coefficient * lam
         return self.friction.bound_at(lam, self.part.nodes.points) * self.areas
@@ -200,7 +209,7 @@ class NodalFriction(NodalTerm):
             block = block * free[:, None]
             own = (start + rows).astype(PETSc.IntType)
             coulomb = (direction is not None and self.friction.type == "coulomb"
-                       and st["lam"][i] > 0)
+                       and self._frozen is None and st["lam"][i] > 0)
             if coulomb:
                 cols, values = self.normal_row(A, i)
                 # −∂f/∂x̃ = −f̂ 𝔣 ∂λ/∂x̃ = f̂ 𝔣 s ∂F̃_ν/∂x̃
@@ -287,6 +296,27 @@ class NodalFriction(NodalTerm):
         stuck = self.x_old + self._shift() / self.scale
         values[self.tangential] = np.where(held, stuck, values[self.tangential])
         self._predicted = values[self.tangential].copy()
+
+    @property
+    def second_try(self) -> Optional[int]:
+        """Coulomb: Newton iterations from the sticking guess before the Tresca predictor
+        (:meth:`freeze`); Tresca has fixed thresholds already (None)."""
+        return SECOND_TRY if self.friction.type == "coulomb" else None
+
+    def freeze(self, stick: bool) -> None:
+        """The Tresca predictor of a Coulomb step that the sticking guess did not solve within
+        :data:`SECOND_TRY` iterations: the thresholds fixed at ∞ (``stick``: every pressed node
+        sticks) or at 𝔣 λ_i from the last residual (then Tresca's law, b_i = 𝔣 λ̄_i where a
+        node is pressed), and the Jacobian without Coulomb's coupling to the normal unknown.
+        Newton with fixed thresholds spreads a slip zone in a few iterations, where Coulomb's,
+        whose thresholds move with the iterate, grows it by about one node per iteration
+        (README: the dragged block on 256×64 cells, 35 iterations → 22)."""
+        self._frozen = (np.full(len(self._lam), np.inf) if stick
+                        else self.friction.coefficient * self._lam)
+
+    def thaw(self) -> None:
+        """Coulomb's own thresholds again (see :meth:`freeze`)."""
+        self._frozen = None
 
     def commit(self, x: np.ndarray) -> None:
         """The step is accepted at x (SNES units; λ of the last residual, evaluated there)."""

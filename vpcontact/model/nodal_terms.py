@@ -116,3 +116,16 @@ class NodalTerm:
 
     def fallback(self, x: PETSc.Vec) -> None:
         """Replace the guess x by the other one (see :meth:`has_fallback`)."""
+
+    #: Newton iterations SNES may take from :meth:`fallback`'s guess before the term's
+    #: predictor runs (None: the term has none; see :meth:`freeze` and
+    #: :meth:`~vpcontact.solver.step_solver.StepSolver._predictor`)
+    second_try: Optional[int] = None
+
+    def freeze(self, stick: bool) -> None:
+        """The predictor's stages: the term's thresholds fixed — infinite where a node is
+        pressed (``stick``: every pressed node sticks) or from the multipliers λ of the last
+        residual — until :meth:`thaw` (only terms with a ``second_try``)."""
+
+    def thaw(self) -> None:
+        """The term's own law again (see :meth:`freeze`)."""

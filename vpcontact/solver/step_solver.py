@@ -34,6 +34,8 @@ _counter = itertools.count()
 #: took 7; in a scene whose dragging steps fail either way, 50 more per failed step cost 1 184
 #: iterations in the run against 680)
 RESCUE_ITERATIONS = 15
+#: Newton iterations of each stage of a nodal term's predictor (:meth:`StepSolver._predictor`)
+PREDICTOR_ITERATIONS = 20
 #: A Newton iteration "stagnates" while ||F|| stays above this many times its best value in the
 #: step (see :meth:`StepSolver._converged`).
 STAGNATION_FACTOR = 10.0
@@ -86,7 +88,8 @@ class StepSolver:
         nodal_terms: objects with ``residual(x, b)`` and ``jacobian(x, A)`` that add their
             nodal terms to SNES's residual and Jacobian at x, ``predict(x)`` (the step's initial
             guess), ``has_fallback()``/``fallback(x)`` (another guess, see
-            :meth:`_run_with_fallback`), ``prepare_jacobian(x)`` (before the UFL Jacobian's
+            :meth:`_run_with_fallback`), ``second_try``/``freeze(stick)``/``thaw()`` (a
+            predictor from that guess, see :meth:`_predictor`), ``prepare_jacobian(x)`` (before the UFL Jacobian's
             assembly) and ``current(x)`` (friction on Signorini parts, the obstacle's normals,
             the sticking guess of friction on compliant parts;
             :class:`~vpcontact.model.nodal_terms.NodalTerm` has the defaults).
@@ -538,9 +541,7 @@ class StepSolver:
             self._P.stabilize(A_snes, x, self._b, self._bounds)
         if self._nodal and not all(term.current(x) for term in self._nodal):
             # (the line search's last residual was elsewhere: λ must be read at x)
-            scratch = self._b.duplicate()
-            self._residual(snes, x, scratch)
-            scratch.destroy()
+            self._read_multipliers(x)
         for term in self._nodal:
             term.jacobian(x, A_snes)
         if self._block is not None:
@@ -664,6 +665,12 @@ class StepSolver:
             self.snes.setTolerances(max_it=max_it)
             self._set_line_search(self._options.get("snes_linesearch_type", "basic"))
 
+    def _read_multipliers(self, x: PETSc.Vec) -> None:
+        """The residual at x, evaluated for the nodal terms: they read their multipliers λ."""
+        scratch = self._b.duplicate()
+        self._residual(self.snes, x, scratch)
+        scratch.destroy()
+
     def _set_line_search(self, kind: str) -> None:
         """Switch SNES's line search (through PETSc's options: petsc4py 3.18 has no handle on
         it); every other setting keeps its value."""
@@ -684,29 +691,79 @@ class StepSolver:
         stops after the longest ``first_try`` of the terms that have one this step (friction
         on a compliant part: 5, :data:`~vpcontact.model.friction.FIRST_TRY`, or 8 at the onset
         of contact; on a Signorini part 0: its extrapolated guess is kept only where it already
-        solves the step) and, unconverged, SNES starts again from the other guess. (Iterations
-        of both count.)"""
+        solves the step) and, unconverged, SNES starts again from the other guess. Where a term
+        has a predictor (Coulomb friction on a Signorini part: ``second_try`` = 10), that second
+        try is limited too and, unconverged, the step starts once more from the other guess
+        with the predictor (:meth:`_predictor`). (Iterations of all count.)"""
         having = [term.has_fallback() for term in self._nodal]  # (collective: no short cut)
         if not any(having):
             return self._run(self.snes)
         first_try = _longest_first_try([t for t, has in zip(self._nodal, having) if has])
         guess = self._x.copy()
-        rtol, atol, stol, max_it = self.snes.getTolerances()
-        self.snes.setTolerances(max_it=min(first_try, max_it))
-        try:
-            reason, first = self._run(self.snes)
-        finally:
-            self.snes.setTolerances(max_it=max_it)
+        reason, first = self._run_limited(first_try)
         if reason > 0:
             guess.destroy()
             return reason, first
+        predictors = [t for t, has in zip(self._nodal, having)
+                      if has and getattr(t, "second_try", None) is not None]
+        try:
+            self._fall_back(guess)
+            if not predictors:
+                reason, more = self._run(self.snes)
+                return reason, first + more
+            reason, more = self._run_limited(max(t.second_try for t in predictors))
+            if reason > 0:
+                return reason, first + more
+            self._fall_back(guess)
+            reason, last = self._predictor(predictors)
+        finally:
+            guess.destroy()
+        return reason, first + more + last
+
+    def _fall_back(self, guess: PETSc.Vec) -> None:
+        """self._x ← the terms' fallback guesses from ``guess`` (from the last try's iterate
+        where a term takes something from it: friction on a compliant part at the onset)."""
         guess.copy(self._x)
-        guess.destroy()
         for term in self._nodal:
             term.fallback(self._x)
         self._loaded_valid = False
+
+    def _predictor(self, terms) -> tuple[int, int]:
+        """SNES from the fallback guess in self._x once the terms' predictor has moved it
+        (Coulomb friction on a Signorini part, :meth:`~vpcontact.model.nodal_friction.
+        NodalFriction.freeze`): first every pressed node sticks, then the thresholds are fixed
+        at that iterate's (Tresca's law, whose Newton iteration spreads a slip zone in a few
+        iterations; kept only where it converged), then the step is solved with the terms' own
+        law from there. Each stage has :data:`PREDICTOR_ITERATIONS`. (Iterations of all
+        count.)"""
+        try:
+            for term in terms:
+                term.freeze(stick=True)
+            _, its = self._run_limited(PREDICTOR_ITERATIONS)
+            self._read_multipliers(self._x)
+            for term in terms:
+                term.freeze(stick=False)
+            stuck = self._x.copy()
+            reason, more = self._run_limited(PREDICTOR_ITERATIONS)
+            its += more
+            if reason <= 0:
+                stuck.copy(self._x)
+            stuck.destroy()
+        finally:
+            for term in terms:
+                term.thaw()
+        self._loaded_valid = False
         reason, more = self._run(self.snes)
-        return reason, first + more
+        return reason, its + more
+
+    def _run_limited(self, max_its: int) -> tuple[int, int]:
+        """:meth:`_run` with at most ``max_its`` Newton iterations (fewer if SNES allows fewer)."""
+        rtol, atol, stol, max_it = self.snes.getTolerances()
+        self.snes.setTolerances(max_it=min(max_its, max_it))
+        try:
+            return self._run(self.snes)
+        finally:
+            self.snes.setTolerances(max_it=max_it)
 
     def _run(self, snes: PETSc.SNES) -> tuple[int, int]:
         """One SNES solve from self._x: (converged reason, iterations)."""
