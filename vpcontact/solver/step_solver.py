@@ -734,8 +734,10 @@ class StepSolver:
         NodalFriction.freeze`): first every pressed node sticks, then the thresholds are fixed
         at that iterate's (Tresca's law, whose Newton iteration spreads a slip zone in a few
         iterations; kept only where it converged), then the step is solved with the terms' own
-        law from there. Each stage has :data:`PREDICTOR_ITERATIONS`. (Iterations of all
-        count.)"""
+        law from there, with the rescue line search if there is one (a block pressed by a rigid
+        plane with friction onto a compliant floor with friction and dragged: no step cut and
+        109 Newton iterations in the run, against 308 and a cut step with ``cp``). The first
+        two stages have :data:`PREDICTOR_ITERATIONS` each. (Iterations of all count.)"""
         try:
             for term in terms:
                 term.freeze(stick=True)
@@ -753,7 +755,14 @@ class StepSolver:
             for term in terms:
                 term.thaw()
         self._loaded_valid = False
-        reason, more = self._run(self.snes)
+        if not self._rescue_line_search:
+            reason, more = self._run(self.snes)
+            return reason, its + more
+        self._set_line_search(self._rescue_line_search)
+        try:
+            reason, more = self._run(self.snes)
+        finally:
+            self._set_line_search(self._options.get("snes_linesearch_type", "basic"))
         return reason, its + more
 
     def _run_limited(self, max_its: int) -> tuple[int, int]:
