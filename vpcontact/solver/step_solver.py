@@ -660,7 +660,7 @@ class StepSolver:
         rtol, atol, stol, max_it = self.snes.getTolerances()
         self.snes.setTolerances(max_it=min(RESCUE_ITERATIONS, max_it))
         try:
-            return self._run_with_fallback()
+            return self._run_with_fallback(predict=False)  # (a quick try: no predictor)
         finally:
             self.snes.setTolerances(max_it=max_it)
             self._set_line_search(self._options.get("snes_linesearch_type", "basic"))
@@ -685,7 +685,7 @@ class StepSolver:
         finally:
             opts.delValue(key)
 
-    def _run_with_fallback(self) -> tuple[int, int]:
+    def _run_with_fallback(self, predict: bool = True) -> tuple[int, int]:
         """SNES from the guess; where a nodal term has another guess (friction on a compliant
         part: sticking, see :class:`~vpcontact.model.friction.StickingGuess`), the first try
         stops after the longest ``first_try`` of the terms that have one this step (friction
@@ -694,7 +694,8 @@ class StepSolver:
         solves the step) and, unconverged, SNES starts again from the other guess. Where a term
         has a predictor (Coulomb friction on a Signorini part: ``second_try`` = 10), that second
         try is limited too and, unconverged, the step starts once more from the other guess
-        with the predictor (:meth:`_predictor`). (Iterations of all count.)"""
+        with the predictor (:meth:`_predictor`; not if ``predict`` is False). (Iterations of
+        all count.)"""
         having = [term.has_fallback() for term in self._nodal]  # (collective: no short cut)
         if not any(having):
             return self._run(self.snes)
@@ -705,7 +706,7 @@ class StepSolver:
             guess.destroy()
             return reason, first
         predictors = [t for t, has in zip(self._nodal, having)
-                      if has and getattr(t, "second_try", None) is not None]
+                      if predict and has and getattr(t, "second_try", None) is not None]
         try:
             self._fall_back(guess)
             if not predictors:
@@ -755,15 +756,18 @@ class StepSolver:
             for term in terms:
                 term.thaw()
         self._loaded_valid = False
-        if not self._rescue_line_search:
-            reason, more = self._run(self.snes)
-            return reason, its + more
-        self._set_line_search(self._rescue_line_search)
+        reason, more = self._run_with_line_search(self._rescue_line_search)
+        return reason, its + more
+
+    def _run_with_line_search(self, kind: str) -> tuple[int, int]:
+        """:meth:`_run` with SNES's line search ``kind`` (empty: the usual one, kept)."""
+        if not kind:
+            return self._run(self.snes)
+        self._set_line_search(kind)
         try:
-            reason, more = self._run(self.snes)
+            return self._run(self.snes)
         finally:
             self._set_line_search(self._options.get("snes_linesearch_type", "basic"))
-        return reason, its + more
 
     def _run_limited(self, max_its: int) -> tuple[int, int]:
         """:meth:`_run` with at most ``max_its`` Newton iterations (fewer if SNES allows fewer)."""
