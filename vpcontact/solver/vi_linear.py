@@ -440,6 +440,13 @@ class LaggedMultigrid(_ReducedSolve):
                 self.inner.setFromOptions()
                 self.configure(self.inner.getPC())
             self.inner.setUp()
+            pc = self.inner.getPC()
+            if pc.getType() == "fieldsplit":
+                # (its blocks are otherwise set up at their first solve, when these options
+                # have left the database: the p-multigrid's levels missed the user's
+                # ``fieldsplit_u_pmg_*`` options)
+                for block in pc.getFieldSplitSubKSP():
+                    block.setUp()
         self.setups += 1
         self._ready = True
 
