@@ -12,7 +12,9 @@ with each part of the field split swapped for its exact counterpart:
 * ``exact_A``: A factorized (MUMPS), S_p;
 * ``formed_schur``: one p-multigrid cycle on A, and the Schur complement C − B Ã⁻¹ Bᵀ of that
   cycle Ã formed column by column and factorized (far too dear to use: a diagnosis);
-* ``exact_both``: A factorized and the Schur complement of A formed and factorized.
+* ``exact_both``: A factorized and the Schur complement of A formed and factorized;
+* ``coarse_lu``, ``four_sweeps``: the p-multigrid cycle with its P1 level factorized, or with
+  four Chebyshev–Jacobi sweeps instead of two.
 
     .venv/bin/python bench/field_split_parts.py [--n 4 8] [--scheme linearized] [--t0 0.06]
         [--sigma-y inf]   # an elastic body, for comparison
@@ -39,15 +41,22 @@ from vpcontact.solver import StepControl, advance  # noqa: E402
 from vpcontact.solver import linear as linear_solvers  # noqa: E402
 from vpcontact.solver import vi_linear  # noqa: E402
 
-#: the exact counterparts: (A by MUMPS, Schur complement formed) per variant
-VARIANTS = {"as_used": (False, False), "exact_A": (True, False),
-            "formed_schur": (False, True), "exact_both": (True, True)}
+#: the exact counterparts: (A by MUMPS, Schur complement formed, other options) per variant
+VARIANTS = {"as_used": (False, False, {}), "exact_A": (True, False, {}),
+            "formed_schur": (False, True, {}), "exact_both": (True, True, {}),
+            # the cycle's own parts: its P1 level solved exactly, or four smoothing sweeps
+            "coarse_lu": (False, False, {"fieldsplit_u_pmg_coarse_pc_type": "lu",
+                                         "fieldsplit_u_pmg_coarse_pc_factor_mat_solver_type":
+                                         "mumps"}),
+            "four_sweeps": (False, False, {"fieldsplit_u_pmg_smooth_ksp_max_it": 4})}
 
 
-def _inner(solver, block, matrix, exact_a: bool, formed: bool, name: str) -> PETSc.KSP:
+def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
+           name: str) -> PETSc.KSP:
     """The field split of vpcontact's lagged VI solver on ``matrix``, with the swaps."""
     prefix = solver.prefix + f"parts_{name}_"
     options = linear_solvers.lagged_options(True)
+    options.update(extra)
     if exact_a:
         options.update({"fieldsplit_u_pc_type": "lu",
                         "fieldsplit_u_pc_factor_mat_solver_type": "mumps"})
@@ -66,6 +75,8 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, name: str) -> PET
         else:
             pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, block.matrix)
         ksp.setUp()
+        for sub in pc.getFieldSplitSubKSP():  # (with the options: as the lagged solver does)
+            sub.setUp()
     return ksp
 
 
