@@ -10,6 +10,7 @@ database, and the converged reason is checked after every solve.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import time as _time
 from typing import Callable, Optional, Sequence
@@ -656,14 +657,8 @@ class StepSolver:
         dragged blocks, README.)"""
         guess.copy(self._x)
         self._predict()
-        self._set_line_search(self._rescue_line_search)
-        rtol, atol, stol, max_it = self.snes.getTolerances()
-        self.snes.setTolerances(max_it=min(RESCUE_ITERATIONS, max_it))
-        try:
+        with self._snes_settings(RESCUE_ITERATIONS, self._rescue_line_search):
             return self._run_with_fallback(predict=False)  # (a quick try: no predictor)
-        finally:
-            self.snes.setTolerances(max_it=max_it)
-            self._set_line_search(self._options.get("snes_linesearch_type", "basic"))
 
     def _read_multipliers(self, x: PETSc.Vec) -> None:
         """The residual at x, evaluated for the nodal terms: they read their multipliers λ."""
@@ -756,27 +751,32 @@ class StepSolver:
             for term in terms:
                 term.thaw()
         self._loaded_valid = False
-        reason, more = self._run_with_line_search(self._rescue_line_search)
+        with self._snes_settings(line_search=self._rescue_line_search):
+            reason, more = self._run(self.snes)
         return reason, its + more
-
-    def _run_with_line_search(self, kind: str) -> tuple[int, int]:
-        """:meth:`_run` with SNES's line search ``kind`` (empty: the usual one, kept)."""
-        if not kind:
-            return self._run(self.snes)
-        self._set_line_search(kind)
-        try:
-            return self._run(self.snes)
-        finally:
-            self._set_line_search(self._options.get("snes_linesearch_type", "basic"))
 
     def _run_limited(self, max_its: int) -> tuple[int, int]:
         """:meth:`_run` with at most ``max_its`` Newton iterations (fewer if SNES allows fewer)."""
-        rtol, atol, stol, max_it = self.snes.getTolerances()
-        self.snes.setTolerances(max_it=min(max_its, max_it))
-        try:
+        with self._snes_settings(max_its):
             return self._run(self.snes)
+
+    @contextlib.contextmanager
+    def _snes_settings(self, max_its: Optional[int] = None, line_search: str = ""):
+        """SNES with at most ``max_its`` Newton iterations (None: as set; fewer if SNES allows
+        fewer) and the line search ``line_search`` (empty: the usual one, left alone) inside the
+        block; both restored after it."""
+        if line_search:
+            self._set_line_search(line_search)
+        max_it = self.snes.getTolerances()[3]
+        if max_its is not None:
+            self.snes.setTolerances(max_it=min(max_its, max_it))
+        try:
+            yield
         finally:
-            self.snes.setTolerances(max_it=max_it)
+            if max_its is not None:
+                self.snes.setTolerances(max_it=max_it)
+            if line_search:
+                self._set_line_search(self._options.get("snes_linesearch_type", "basic"))
 
     def _run(self, snes: PETSc.SNES) -> tuple[int, int]:
         """One SNES solve from self._x: (converged reason, iterations)."""
