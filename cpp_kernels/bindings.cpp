@@ -6,6 +6,7 @@
 // kernels rely on; everything else is validated in C++ (std::invalid_argument ->
 // ValueError) or in vpcontact/kernels.py.
 #include <vpcontact/kernels.hpp>
+#include <vpcontact/patch_smoother.hpp>
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -27,6 +28,7 @@ using OutArray = py::array_t<double, py::array::c_style>;
 // The tangent output may be None: the kernels then skip it (and, for the implicit updates,
 // the work of computing it).
 using OptionalOut = std::optional<OutArray>;
+using IndexArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
 
 void check_shape(const py::array& a, const std::vector<py::ssize_t>& shape, const char* name)
 {
@@ -72,6 +74,17 @@ StepArrays step_arrays(Model model, const InArray& sigma_old, const InArray& eps
   step.sigma_new = out(sigma_new, {N, n}, "sigma_new");
   step.tangent = tangent ? out(*tangent, {N, n, n}, "tangent") : nullptr;
   return step;
+}
+
+LocalCsr local_csr(const IndexArray& row_start, const IndexArray& columns, const InArray& values)
+{
+  if (row_start.ndim() != 1 || row_start.shape(0) < 1)
+    throw std::invalid_argument("row_start: expected shape (rows + 1)");
+  const py::ssize_t rows = row_start.shape(0) - 1;
+  const py::ssize_t nnz = row_start.at(rows);
+  check_shape(columns, {nnz}, "columns");
+  check_shape(values, {nnz}, "values");
+  return {static_cast<std::size_t>(rows), row_start.data(), columns.data(), values.data()};
 }
 
 // py::arg list shared by the stress updates.
@@ -230,4 +243,40 @@ PYBIND11_MODULE(_cpp, m)
       },
       py::arg("model"), py::arg("E"), py::arg("nu"), py::arg("a"), py::arg("b"), py::arg("dt"),
       STEP_ARGS);
+
+  py::class_<PatchSmoother>(m, "PatchSmoother")
+      .def(py::init(
+               [](const IndexArray& offsets, const IndexArray& indices, std::size_t num_rows)
+               {
+                 check_shape(offsets, {offsets.ndim() == 1 ? offsets.shape(0) : -2}, "offsets");
+                 check_shape(indices, {indices.ndim() == 1 ? indices.shape(0) : -2}, "indices");
+                 return PatchSmoother(
+                     std::vector<std::int64_t>(offsets.data(), offsets.data() + offsets.size()),
+                     std::vector<std::int64_t>(indices.data(), indices.data() + indices.size()),
+                     num_rows);
+               }),
+           py::arg("offsets"), py::arg("indices"), py::arg("num_rows"))
+      .def_property_readonly("size", &PatchSmoother::size)
+      .def_property_readonly("singular", &PatchSmoother::singular)
+      .def(
+          "factorize",
+          [](PatchSmoother& self, const IndexArray& row_start, const IndexArray& columns,
+             const InArray& values)
+          {
+            const LocalCsr A = local_csr(row_start, columns, values);
+            py::gil_scoped_release release;
+            self.factorize(A);
+          },
+          py::arg("row_start"), py::arg("columns"), py::arg("values"))
+      .def(
+          "apply",
+          [](const PatchSmoother& self, const InArray& r, OutArray& y, double omega)
+          {
+            const auto n = static_cast<py::ssize_t>(self.num_rows());
+            check_shape(r, {n}, "r");
+            double* dst = out(y, {n}, "y");
+            py::gil_scoped_release release;
+            self.apply(r.data(), dst, omega);
+          },
+          py::arg("r"), py::arg("y").noconvert(), py::arg("omega"));
 }

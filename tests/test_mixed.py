@@ -241,14 +241,16 @@ def test_block_preconditioner_inside_the_vi_matches_the_direct_solver():
 
 def test_options_reach_the_p_multigrid_levels_inside_the_vi():
     """Options under ``lagged_fieldsplit_u_pmg_smooth_`` and ``..._coarse_`` reach the
-    p-multigrid's levels in SNES VI's lagged solver. The field split's blocks are set up while
+    p-multigrid's levels in SNES VI's lagged solver (the KSP smoother, chosen over the vertex
+    stars by ``..._pmg_smooth_stars false``). The field split's blocks are set up while
     the lagged solver's options are in PETSc's database; they used to be set up at their first
     solve, after the options had left it, and the levels kept their defaults (two sweeps,
     GAMG)."""
     from vpcontact.paper import signorini as paper
     from vpcontact.solver import StepControl, advance
 
-    options = {"lagged_fieldsplit_u_pmg_smooth_ksp_max_it": 3,
+    options = {"lagged_fieldsplit_u_pmg_smooth_stars": "false",
+               "lagged_fieldsplit_u_pmg_smooth_ksp_max_it": 3,
                "lagged_fieldsplit_u_pmg_coarse_pc_type": "jacobi"}
     problem = paper.signorini_3d(6, 2, 2, petsc_options=options, sigma_y=paper.SIGMA_Y,
                                  mu_star=paper.MU_STAR, formulation="mixed", degree=2,
@@ -256,6 +258,7 @@ def test_options_reach_the_p_multigrid_levels_inside_the_vi():
     list(advance(problem, 0.02, StepControl(0.02)))
     block = problem.solver.lagged_lu.inner.getPC().getFieldSplitSubKSP()[0]
     cycle = block.getPC().getPythonContext()
+    assert cycle.star_sweep is None  # the KSP smoother, as asked
     assert cycle.smoother.getTolerances()[3] == 3
     assert cycle.coarse.getPC().getType() == "jacobi"
 

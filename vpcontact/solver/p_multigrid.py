@@ -9,7 +9,7 @@ same mesh, P1 is a natural coarse space with an exact embedding: the interpolati
 P2, vertex values kept, edge midpoints the mean of their vertices) is a sparse matrix with one
 or two entries per row. One cycle of this preconditioner is
 
-    y  = S(b)                              Chebyshev–Jacobi smoothing on A (P2), from zero
+    y  = S(b)                              smoothing on A (P2), from zero: vertex stars
     y += P GAMG(Pᵀ(b − A y))               coarse correction: A_c = Pᵀ A P (Galerkin, P1)
     y += S(b − A y)                        the same smoothing again (a symmetric cycle)
 
@@ -23,6 +23,14 @@ iterations to 1e−8 at 1 038 / 6 400 / 19 690 / 44 508 / 143 128 unknowns: 51 /
 → 52 / 55 / 56 / 58 / 61 with vpcontact's unknowns (p the mean stress), 34 / 41 / 48 / 54 / 62
 → 30 / 31 / 33 / 32 / 38 with Herrmann's; the set-up at 143 128 unknowns takes 1.6 s instead of
 28 s (GAMG's on the dense P2 graph), the solve 7.4 s instead of 24 s.
+
+S is one damped sweep over the vertex stars, each solved exactly
+(:mod:`~vpcontact.solver.star_smoother`): where the body flows, point smoothing left the
+volume-keeping modes of the soft tangent to the Krylov method, and its iterations grew with the
+mesh. Options (under the displacement split's prefix, e.g. ``lagged_fieldsplit_u_`` inside SNES
+VI): ``pmg_smooth_stars false`` smooths with the KSP ``pmg_smooth_`` instead (two
+Chebyshev–Jacobi sweeps by default, as before the stars), and ``pmg_coarse_*`` configure the
+coarse level.
 
 PETSc creates the context (``pc_type python``, ``pc_python_type`` this module's
 :class:`PMultigrid`) for the displacement split; it finds its spaces through :func:`register`,
@@ -41,10 +49,12 @@ from dolfinx.cpp.fem.petsc import interpolation_matrix
 from petsc4py import PETSc
 
 from vpcontact.errors import SolverOptionError
+from vpcontact.solver import star_smoother
 from vpcontact.solver.vi_linear import rigid_body_modes
 
-#: Options of the smoothing on the P2 level: two Chebyshev–Jacobi sweeps (before and after the
-#: coarse correction), the spectrum bound estimated for every new matrix.
+#: Options of the KSP smoothing on the P2 level (with ``pmg_smooth_stars false``): two
+#: Chebyshev–Jacobi sweeps (before and after the coarse correction), the spectrum bound
+#: estimated for every new matrix.
 SMOOTHER_OPTIONS = {
     "ksp_type": "chebyshev",
     "ksp_max_it": 2,
@@ -71,7 +81,9 @@ _SPACES: "weakref.WeakValueDictionary[str, CoarseSpace]" = weakref.WeakValueDict
 
 class CoarseSpace:
     """The P1 coarse space of a P2 displacement block: the interpolation P (rows laid out like
-    the displacement unknowns of SNES, in its frames) and the coarse rigid-body modes.
+    the displacement unknowns of SNES, in its frames) and the coarse rigid-body modes; and the
+    vertex stars of the P2 level's smoother (:func:`~vpcontact.solver.star_smoother.
+    vertex_stars`).
 
     Args:
         V: the P2 vector space of the displacement.
@@ -93,6 +105,7 @@ class CoarseSpace:
         self.interpolation = P
         self.block_size = self.V1.dofmap.index_map_bs
         self.modes = rigid_body_modes(self.V1)  # Cartesian: P carries the frames
+        self.stars = star_smoother.vertex_stars(V)
 
     def destroy(self) -> None:
         self.interpolation.destroy()
@@ -124,6 +137,21 @@ def identity_rows(A: PETSc.Mat) -> np.ndarray:
     return (start + np.flatnonzero(counts <= 1)).astype(PETSc.IntType)
 
 
+_BOOLEANS = {"true": True, "yes": True, "1": True, "false": False, "no": False, "0": False}
+
+
+def check_options(options: dict) -> None:
+    """Refuse a ``pmg_smooth_stars`` option (under any prefix) that is no PETSc truth value: it
+    is read only when the field split first sets up, inside a solve.
+
+    Raises:
+        ValueError: naming the option and the valid values.
+    """
+    for key, value in options.items():
+        if key.endswith("pmg_smooth_stars") and str(value).lower() not in _BOOLEANS:
+            raise ValueError(f"{key} must be true or false, got {value!r}")
+
+
 def _set_up(ksp: PETSc.KSP, defaults: dict) -> None:
     """Set ``ksp`` up with ``defaults`` under its prefix (options already in PETSc's database,
     the user's, take precedence; GAMG reads its levels' options while it sets up)."""
@@ -148,6 +176,7 @@ class PMultigrid:
         self.P: Optional[PETSc.Mat] = None
         self.coarse_matrix: Optional[PETSc.Mat] = None
         self.smoother = self.coarse = None
+        self.star_sweep: Optional[star_smoother.StarSmoother] = None
         self._r = self._rc = self._ec = self._dy = None
 
     def _create(self, pc: PETSc.PC) -> None:
@@ -175,8 +204,7 @@ class PMultigrid:
         if self.coarse_matrix is not None:
             self.coarse_matrix.destroy()
         self.coarse_matrix = coarse
-        self.smoother.setOperators(A, B)
-        _set_up(self.smoother, SMOOTHER_OPTIONS)
+        self._set_up_smoother(pc, A, B)
         self.coarse.setOperators(coarse)
         _set_up(self.coarse, COARSE_OPTIONS)
         for vec in (self._r, self._rc, self._ec, self._dy):
@@ -186,10 +214,27 @@ class PMultigrid:
         self._ec = self._rc.duplicate()
         self._dy = self._r.duplicate()
 
+    def _set_up_smoother(self, pc: PETSc.PC, A: PETSc.Mat, B: PETSc.Mat) -> None:
+        """The vertex stars' sweep, or the KSP ``pmg_smooth_`` with ``pmg_smooth_stars false``
+        (read now: the options are in PETSc's database while the field split sets up)."""
+        key = (pc.getOptionsPrefix() or "") + "pmg_smooth_stars"
+        value = PETSc.Options().getString(key, "true")
+        if value.lower() not in _BOOLEANS:  # (given on the command line: not checked before)
+            raise SolverOptionError(f"{key} must be true or false, got {value!r}")
+        if not _BOOLEANS[value.lower()]:
+            self.star_sweep = None
+            self.smoother.setOperators(A, B)
+            _set_up(self.smoother, SMOOTHER_OPTIONS)
+            return
+        if self.star_sweep is None:
+            self.star_sweep = star_smoother.StarSmoother(self.space.stars, B.getLocalSize()[0])
+        self.star_sweep.set_operator(B)
+
     def apply(self, pc: PETSc.PC, b: PETSc.Vec, y: PETSc.Vec) -> None:
         A = pc.getOperators()[0]
         r, rc, ec, dy = self._r, self._rc, self._ec, self._dy
-        self.smoother.solve(b, y)
+        smoother = self.star_sweep or self.smoother
+        smoother.solve(b, y)
         A.mult(y, r)
         r.aypx(-1.0, b)
         self.P.multTranspose(r, rc)
@@ -197,7 +242,7 @@ class PMultigrid:
         self.P.multAdd(ec, y, y)
         A.mult(y, r)
         r.aypx(-1.0, b)
-        self.smoother.solve(r, dy)
+        smoother.solve(r, dy)
         y.axpy(1.0, dy)
 
     def destroy(self, pc: PETSc.PC) -> None:

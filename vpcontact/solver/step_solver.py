@@ -24,6 +24,7 @@ from petsc4py import PETSc
 from vpcontact.model.extent import mesh_extent
 from vpcontact.errors import ConvergenceError, InputError
 from vpcontact.solver import linear as linear_solvers
+from vpcontact.solver import p_multigrid
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
                                           rejected_option)
 from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
@@ -240,6 +241,7 @@ class StepSolver:
         if self._stagnation_its < 0:
             raise ValueError("vpcontact_stagnation_its must be >= 0 (0: off), got "
                              f"{self._stagnation_its}")
+        p_multigrid.check_options(self._options)
 
     def _setup(self, snes: PETSc.SNES) -> None:
         snes.setFunction(self._residual, self._b)

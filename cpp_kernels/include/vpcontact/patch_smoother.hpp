@@ -1,0 +1,230 @@
+// SPDX-License-Identifier: MIT
+/// @file patch_smoother.hpp
+/// @brief Additive Schwarz smoothing on small patches of a sparse matrix (the vertex stars of a
+/// P2 displacement block): each patch's block is factorized densely once per matrix, and a
+/// sweep solves every patch exactly for the same residual and adds the damped corrections.
+/// Rows are the caller's local rows; a patch holds local row indices only (couplings to other
+/// processes' unknowns are left out of the blocks).
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace vpcontact
+{
+
+/// A compressed-row view of the local rows of a sparse matrix: row i's entries are
+/// columns[row_start[i] .. row_start[i+1]) with their values; a column index outside
+/// [0, num_rows) (another process's unknown) is skipped.
+struct LocalCsr
+{
+  std::size_t num_rows = 0;
+  const std::int64_t* row_start = nullptr;
+  const std::int64_t* columns = nullptr;
+  const double* values = nullptr;
+};
+
+/// Exact solves on overlapping patches of unknowns.
+class PatchSmoother
+{
+public:
+  /// @param offsets patch p holds indices[offsets[p] .. offsets[p+1]); size: patches + 1.
+  /// @param indices local row indices, each in [0, num_rows), no repeats within a patch.
+  /// @param num_rows number of local rows of the matrices this smoother will factorize.
+  /// @throws std::invalid_argument naming `offsets` or `indices` when they do not describe
+  /// patches of [0, num_rows).
+  PatchSmoother(std::vector<std::int64_t> offsets, std::vector<std::int64_t> indices,
+                std::size_t num_rows)
+      : offsets_(std::move(offsets)), indices_(std::move(indices)), num_rows_(num_rows)
+  {
+    if (offsets_.empty() || offsets_.front() != 0
+        || offsets_.back() != static_cast<std::int64_t>(indices_.size())
+        || !std::is_sorted(offsets_.begin(), offsets_.end()))
+      throw std::invalid_argument("offsets: must rise from 0 to the number of indices");
+    std::vector<std::int64_t> seen(num_rows_, -1);
+    std::size_t factor_size = 0;
+    for (std::size_t p = 0; p + 1 < offsets_.size(); ++p)
+    {
+      for (std::int64_t k = offsets_[p]; k < offsets_[p + 1]; ++k)
+      {
+        const std::int64_t i = indices_[k];
+        if (i < 0 || i >= static_cast<std::int64_t>(num_rows_))
+          throw std::invalid_argument("indices: " + std::to_string(i) + " is not a local row");
+        if (seen[i] == static_cast<std::int64_t>(p))
+          throw std::invalid_argument("indices: row " + std::to_string(i)
+                                      + " repeated in patch " + std::to_string(p));
+        seen[i] = static_cast<std::int64_t>(p);
+      }
+      factor_start_.push_back(factor_size);
+      const std::size_t n = static_cast<std::size_t>(offsets_[p + 1] - offsets_[p]);
+      factor_size += n * n;
+    }
+    factor_start_.push_back(factor_size);
+    factors_.assign(factor_size, 0.0);
+    pivots_.assign(indices_.size(), 0);
+    position_.assign(num_rows_, -1);
+  }
+
+  /// Number of patches.
+  std::size_t size() const noexcept { return offsets_.size() - 1; }
+
+  /// Number of local rows of the matrices and vectors this smoother works on.
+  std::size_t num_rows() const noexcept { return num_rows_; }
+
+  /// Number of patches whose block was singular at the last factorization (they are
+  /// smoothed by their diagonal instead).
+  std::size_t singular() const noexcept { return singular_; }
+
+  /// Factorize every patch's block of `A` (LU with partial pivoting, in place).
+  /// @param A the local rows; A.num_rows must be this smoother's.
+  /// @throws std::invalid_argument naming `A` if its row count differs.
+  void factorize(const LocalCsr& A)
+  {
+    if (A.num_rows != num_rows_)
+      throw std::invalid_argument("A: " + std::to_string(A.num_rows) + " rows, the patches have "
+                                  + std::to_string(num_rows_));
+    singular_ = 0;
+    diagonal_only_.assign(size(), false);
+    for (std::size_t p = 0; p < size(); ++p)
+    {
+      const std::int64_t* rows = indices_.data() + offsets_[p];
+      const std::size_t n = static_cast<std::size_t>(offsets_[p + 1] - offsets_[p]);
+      double* F = factors_.data() + factor_start_[p];
+      std::fill(F, F + n * n, 0.0);
+      for (std::size_t a = 0; a < n; ++a)
+        position_[rows[a]] = static_cast<std::int64_t>(a);
+      for (std::size_t a = 0; a < n; ++a)
+        for (std::int64_t k = A.row_start[rows[a]]; k < A.row_start[rows[a] + 1]; ++k)
+        {
+          const std::int64_t j = A.columns[k];
+          if (j >= 0 && j < static_cast<std::int64_t>(num_rows_) && position_[j] >= 0)
+            F[a * n + static_cast<std::size_t>(position_[j])] = A.values[k];
+        }
+      for (std::size_t a = 0; a < n; ++a)
+        position_[rows[a]] = -1;
+      if (!lu(F, pivots_.data() + offsets_[p], n))
+      {
+        ++singular_;
+        diagonal_only_[p] = true;
+        for (std::size_t a = 0; a < n; ++a) // the diagonal again, for the fallback
+        {
+          F[a * n + a] = 0.0;
+          for (std::int64_t k = A.row_start[rows[a]]; k < A.row_start[rows[a] + 1]; ++k)
+            if (A.columns[k] == rows[a])
+              F[a * n + a] = A.values[k];
+        }
+      }
+    }
+    factorized_ = true;
+  }
+
+  /// One sweep from zero: y = omega * sum_p R_p^T A_pp^{-1} R_p r.
+  /// @param r residual (num_rows values); @param y output (num_rows values).
+  void apply(const double* r, double* y, double omega) const
+  {
+    check_factorized();
+    std::fill(y, y + num_rows_, 0.0);
+    std::vector<double> work(max_patch());
+    for (std::size_t p = 0; p < size(); ++p)
+    {
+      const std::int64_t* rows = indices_.data() + offsets_[p];
+      const std::size_t n = static_cast<std::size_t>(offsets_[p + 1] - offsets_[p]);
+      for (std::size_t a = 0; a < n; ++a)
+        work[a] = r[rows[a]];
+      solve(p, work.data());
+      for (std::size_t a = 0; a < n; ++a)
+        y[rows[a]] += omega * work[a];
+    }
+  }
+
+private:
+  std::vector<std::int64_t> offsets_, indices_;
+  std::size_t num_rows_;
+  std::vector<std::size_t> factor_start_;
+  std::vector<double> factors_;
+  std::vector<std::int64_t> pivots_;
+  std::vector<std::int64_t> position_;
+  std::vector<bool> diagonal_only_;
+  std::size_t singular_ = 0;
+  bool factorized_ = false;
+
+  std::size_t max_patch() const
+  {
+    std::int64_t m = 0;
+    for (std::size_t p = 0; p < size(); ++p)
+      m = std::max(m, offsets_[p + 1] - offsets_[p]);
+    return static_cast<std::size_t>(m);
+  }
+
+  void check_factorized() const
+  {
+    if (!factorized_)
+      throw std::invalid_argument("PatchSmoother: factorize a matrix before applying it");
+  }
+
+  /// LU with partial pivoting of the n x n row-major F in place; false if a pivot is zero
+  /// (relative to the block's largest entry) or not finite.
+  static bool lu(double* F, std::int64_t* pivot, std::size_t n)
+  {
+    double scale = 0.0;
+    for (std::size_t k = 0; k < n * n; ++k)
+      scale = std::fmax(scale, std::fabs(F[k]));
+    if (!(scale > 0.0) || !std::isfinite(scale))
+      return false;
+    for (std::size_t c = 0; c < n; ++c)
+    {
+      std::size_t best = c;
+      for (std::size_t r = c + 1; r < n; ++r)
+        if (std::fabs(F[r * n + c]) > std::fabs(F[best * n + c]))
+          best = r;
+      pivot[c] = static_cast<std::int64_t>(best);
+      if (!(std::fabs(F[best * n + c]) > 1e-14 * scale))
+        return false;
+      if (best != c)
+        for (std::size_t k = 0; k < n; ++k)
+          std::swap(F[c * n + k], F[best * n + k]);
+      const double inv = 1.0 / F[c * n + c];
+      for (std::size_t r = c + 1; r < n; ++r)
+      {
+        const double m = F[r * n + c] * inv;
+        F[r * n + c] = m;
+        if (m != 0.0)
+          for (std::size_t k = c + 1; k < n; ++k)
+            F[r * n + k] -= m * F[c * n + k];
+      }
+    }
+    return true;
+  }
+
+  /// x <- A_pp^{-1} x with patch p's factors (or its diagonal where the block was singular).
+  void solve(std::size_t p, double* x) const
+  {
+    const std::size_t n = static_cast<std::size_t>(offsets_[p + 1] - offsets_[p]);
+    const double* F = factors_.data() + factor_start_[p];
+    if (diagonal_only_[p])
+    {
+      for (std::size_t a = 0; a < n; ++a)
+        x[a] = F[a * n + a] != 0.0 ? x[a] / F[a * n + a] : 0.0;
+      return;
+    }
+    const std::int64_t* pivot = pivots_.data() + offsets_[p];
+    for (std::size_t c = 0; c < n; ++c)
+      std::swap(x[c], x[static_cast<std::size_t>(pivot[c])]);
+    for (std::size_t r = 1; r < n; ++r)
+      for (std::size_t k = 0; k < r; ++k)
+        x[r] -= F[r * n + k] * x[k];
+    for (std::size_t r = n; r-- > 0;)
+    {
+      for (std::size_t k = r + 1; k < n; ++k)
+        x[r] -= F[r * n + k] * x[k];
+      x[r] /= F[r * n + r];
+    }
+  }
+};
+
+} // namespace vpcontact
