@@ -193,7 +193,7 @@ def test_the_star_sweep_smooths_an_elasticity_matrix():
 def test_a_bad_star_sweep_option_is_refused():
     from vpcontact.paper import signorini as paper
 
-    with pytest.raises(SolverOptionError, match="pmg_smooth_stars must be true or false, "
+    with pytest.raises(SolverOptionError, match="pmg_smooth_stars must be auto, true or false, "
                        "got 'jacobi'") as err:
         paper.signorini_3d(6, 2, 2, petsc_options={"lagged_fieldsplit_u_pmg_smooth_stars":
                                                    "jacobi"},
@@ -202,17 +202,22 @@ def test_a_bad_star_sweep_option_is_refused():
     assert err.value.option == "lagged_fieldsplit_u_pmg_smooth_stars"
 
 
-def test_the_vi_solver_smooths_over_the_stars_by_default():
-    """The mixed formulation's iterative solver inside SNES VI (the paper's 3-D test, flowing
-    and in contact) uses the star sweep on the displacement block, with no singular star."""
+@pytest.mark.parametrize("above, stars", [(0, True), (1, False)])
+def test_the_stars_smooth_large_blocks_by_default(above, stars, monkeypatch):
+    """``pmg_smooth_stars auto`` (the default) smooths over the stars from STARS_FROM rows of the
+    displacement block on (here the threshold moved to the size of the paper's 3-D test on
+    6×2×2 cells, and one row above it), with Chebyshev–Jacobi below."""
     from vpcontact.paper import signorini as paper
-    from vpcontact.solver import StepControl, advance
+    from vpcontact.solver import StepControl, advance, p_multigrid
 
     problem = paper.signorini_3d(6, 2, 2, petsc_options={}, sigma_y=paper.SIGMA_Y,
                                  mu_star=paper.MU_STAR, formulation="mixed", degree=2,
                                  linear="iterative")
+    rows = problem.solver._block.is_u.getSize()
+    monkeypatch.setattr(p_multigrid, "STARS_FROM", rows + above)
     list(advance(problem, 0.04, StepControl(0.02)))
     block = problem.solver.lagged_lu.inner.getPC().getFieldSplitSubKSP()[0]
     cycle = block.getPC().getPythonContext()
-    assert cycle.star_sweep is not None
-    assert cycle.star_sweep.singular == 0
+    assert (cycle.star_sweep is not None) == stars
+    if stars:
+        assert cycle.star_sweep.singular == 0

@@ -25,12 +25,13 @@ iterations to 1e−8 at 1 038 / 6 400 / 19 690 / 44 508 / 143 128 unknowns: 51 /
 28 s (GAMG's on the dense P2 graph), the solve 7.4 s instead of 24 s.
 
 S is one damped sweep over the vertex stars, each solved exactly
-(:mod:`~vpcontact.solver.star_smoother`): where the body flows, point smoothing left the
-volume-keeping modes of the soft tangent to the Krylov method, and its iterations grew with the
-mesh. Options (under the displacement split's prefix, e.g. ``lagged_fieldsplit_u_`` inside SNES
-VI): ``pmg_smooth_stars false`` smooths with the KSP ``pmg_smooth_`` instead (two
-Chebyshev–Jacobi sweeps by default, as before the stars), and ``pmg_coarse_*`` configure the
-coarse level.
+(:mod:`~vpcontact.solver.star_smoother`), on displacement blocks of :data:`STARS_FROM` rows or
+more; on smaller ones the KSP ``pmg_smooth_`` (two Chebyshev–Jacobi sweeps). Where the body
+flows, point smoothing leaves the volume-keeping modes of the soft tangent to the Krylov
+method, and its iterations grow with the mesh; the stars reach them, at about 1.4 times the
+cost per Krylov iteration. Options (under the displacement split's prefix, e.g.
+``lagged_fieldsplit_u_`` inside SNES VI): ``pmg_smooth_stars auto | true | false``, and
+``pmg_smooth_*`` and ``pmg_coarse_*`` for the KSP smoother and the coarse level.
 
 PETSc creates the context (``pc_type python``, ``pc_python_type`` this module's
 :class:`PMultigrid`) for the displacement split; it finds its spaces through :func:`register`,
@@ -52,7 +53,15 @@ from vpcontact.errors import SolverOptionError
 from vpcontact.solver import star_smoother
 from vpcontact.solver.vi_linear import rigid_body_modes
 
-#: Options of the KSP smoothing on the P2 level (with ``pmg_smooth_stars false``): two
+#: Displacement blocks from this many rows on are smoothed over the vertex stars (option
+#: ``pmg_smooth_stars auto``, the default). Measured in the time loop of the paper's 3-D test
+#: (its data, iterative solver, k = 0.01; README): the stars cost 1.2–1.4× the Chebyshev–Jacobi
+#: sweeps' time per step at 6 400 and 19 690 unknowns, where the Krylov counts are about the same,
+#: and save 14 % at 44 508 and 33 % at 143 128 unknowns, where the flowing steps' counts had
+#: grown (54.7 → 46.3 and 81.6 → 54.5 FGMRES iterations per Newton iteration).
+STARS_FROM = 40_000
+
+#: Options of the KSP smoothing on the P2 level (smaller blocks, or ``pmg_smooth_stars false``): two
 #: Chebyshev–Jacobi sweeps (before and after the coarse correction), the spectrum bound
 #: estimated for every new matrix.
 SMOOTHER_OPTIONS = {
@@ -137,19 +146,20 @@ def identity_rows(A: PETSc.Mat) -> np.ndarray:
     return (start + np.flatnonzero(counts <= 1)).astype(PETSc.IntType)
 
 
-_BOOLEANS = {"true": True, "yes": True, "1": True, "false": False, "no": False, "0": False}
+_STAR_CHOICES = {"auto": None, "true": True, "yes": True, "1": True,
+                 "false": False, "no": False, "0": False}
 
 
 def check_options(options: dict) -> None:
-    """Refuse a ``pmg_smooth_stars`` option (under any prefix) that is no PETSc truth value: it
-    is read only when the field split first sets up, inside a solve.
+    """Refuse a ``pmg_smooth_stars`` option (under any prefix) that is neither ``auto`` nor a
+    PETSc truth value: it is read only when the field split first sets up, inside a solve.
 
     Raises:
         ValueError: naming the option and the valid values.
     """
     for key, value in options.items():
-        if key.endswith("pmg_smooth_stars") and str(value).lower() not in _BOOLEANS:
-            raise ValueError(f"{key} must be true or false, got {value!r}")
+        if key.endswith("pmg_smooth_stars") and str(value).lower() not in _STAR_CHOICES:
+            raise ValueError(f"{key} must be auto, true or false, got {value!r}")
 
 
 def _set_up(ksp: PETSc.KSP, defaults: dict) -> None:
@@ -215,13 +225,17 @@ class PMultigrid:
         self._dy = self._r.duplicate()
 
     def _set_up_smoother(self, pc: PETSc.PC, A: PETSc.Mat, B: PETSc.Mat) -> None:
-        """The vertex stars' sweep, or the KSP ``pmg_smooth_`` with ``pmg_smooth_stars false``
-        (read now: the options are in PETSc's database while the field split sets up)."""
+        """The vertex stars' sweep, or the KSP ``pmg_smooth_`` (``pmg_smooth_stars``: ``auto``
+        chooses by the block's size, :data:`STARS_FROM`; read now: the options are in PETSc's
+        database while the field split sets up)."""
         key = (pc.getOptionsPrefix() or "") + "pmg_smooth_stars"
-        value = PETSc.Options().getString(key, "true")
-        if value.lower() not in _BOOLEANS:  # (given on the command line: not checked before)
-            raise SolverOptionError(f"{key} must be true or false, got {value!r}")
-        if not _BOOLEANS[value.lower()]:
+        value = PETSc.Options().getString(key, "auto")
+        if value.lower() not in _STAR_CHOICES:  # (given on the command line: not checked before)
+            raise SolverOptionError(f"{key} must be auto, true or false, got {value!r}")
+        stars = _STAR_CHOICES[value.lower()]
+        if stars is None:
+            stars = B.getSize()[0] >= STARS_FROM
+        if not stars:
             self.star_sweep = None
             self.smoother.setOperators(A, B)
             _set_up(self.smoother, SMOOTHER_OPTIONS)
