@@ -14,7 +14,10 @@ with each part of the field split swapped for its exact counterpart:
   cycle Ã formed column by column and factorized (far too dear to use: a diagnosis);
 * ``exact_both``: A factorized and the Schur complement of A formed and factorized;
 * ``coarse_lu``, ``four_sweeps``: the p-multigrid cycle with its P1 level factorized, or with
-  four Chebyshev–Jacobi sweeps instead of two.
+  four Chebyshev–Jacobi sweeps instead of two;
+* ``stars``, ``chebyshev``: the cycle's P2 level smoothed over the vertex stars, or by two
+  Chebyshev–Jacobi sweeps, whatever the size (``as_used`` chooses by it);
+  ``stars_formed_schur``: the stars' cycle with its Schur complement formed and factorized.
 
     .venv/bin/python bench/field_split_parts.py [--n 4 8] [--scheme linearized] [--t0 0.06]
         [--sigma-y inf]   # an elastic body, for comparison
@@ -47,8 +50,13 @@ VARIANTS = {"as_used": (False, False, {}), "exact_A": (True, False, {}),
             # the cycle's own parts: its P1 level solved exactly, or four smoothing sweeps
             "coarse_lu": (False, False, {"fieldsplit_u_pmg_coarse_pc_type": "lu",
                                          "fieldsplit_u_pmg_coarse_pc_factor_mat_solver_type":
-                                         "mumps"}),
-            "four_sweeps": (False, False, {"fieldsplit_u_pmg_smooth_ksp_max_it": 4})}
+                                         "mumps", "fieldsplit_u_pmg_smooth_stars": "false"}),
+            "four_sweeps": (False, False, {"fieldsplit_u_pmg_smooth_ksp_max_it": 4,
+                                           "fieldsplit_u_pmg_smooth_stars": "false"}),
+            # the P2 level's smoothing chosen (as_used: by the block's size)
+            "stars": (False, False, {"fieldsplit_u_pmg_smooth_stars": "true"}),
+            "chebyshev": (False, False, {"fieldsplit_u_pmg_smooth_stars": "false"}),
+            "stars_formed_schur": (False, True, {"fieldsplit_u_pmg_smooth_stars": "true"})}
 
 
 def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
