@@ -187,6 +187,7 @@ class StepSolver:
         self._extent = mesh_extent(mesh)
         self._fnorm0 = 0.0
         self._best, self._above, self.stagnated = 0.0, 0, False  # (see _converged)
+        self._crawl_its = 0
         self._loaded = self._x.duplicate()  # the iterate whose refresh is current
         self._loaded_valid = False
         self.total_iterations = 0
@@ -443,9 +444,12 @@ class StepSolver:
         if it == 0:
             self._fnorm0 = fnorm
             self._best, self._above, self.stagnated = fnorm, 0, False
+            self._halved_at, self._halved_best = 0, fnorm
             self._repeats = 0
         else:
             self._above = self._above + 1 if fnorm > STAGNATION_FACTOR * self._best else 0
+            if fnorm <= 0.5 * self._halved_best:
+                self._halved_at, self._halved_best = it, fnorm
             self._best = min(self._best, fnorm)
             self._repeats = self._repeats + 1 if fnorm == self._last_fnorm else 0
         self._last_fnorm = fnorm
@@ -460,6 +464,8 @@ class StepSolver:
             # (or the same ||F||, to the last bit, three times: the iterate no longer moves —
             # SNES VI projecting each step back onto the bounds)
             return _SNES_REASON.CONVERGED_SNORM_RELATIVE
+        if self._crawl_its and it - self._halved_at >= self._crawl_its:
+            return _SNES_REASON.DIVERGED_DTOL
         if self._stagnation_its and self._above >= self._stagnation_its:
             self.stagnated = True
             return _SNES_REASON.DIVERGED_DTOL
@@ -709,7 +715,12 @@ class StepSolver:
             if not predictors:
                 reason, more = self._run(self.snes)
                 return reason, first + more
-            reason, more = self._run_limited(max(t.second_try for t in predictors))
+            import os
+            self._crawl_its = int(os.environ.get("CRAWL", "0"))
+            try:
+                reason, more = self._run_limited(max(t.second_try for t in predictors))
+            finally:
+                self._crawl_its = 0
             if reason > 0:
                 return reason, first + more
             self._fall_back(guess)
