@@ -38,6 +38,14 @@ _counter = itertools.count()
 RESCUE_ITERATIONS = 15
 #: Newton iterations of each stage of a nodal term's predictor (:meth:`StepSolver._predictor`)
 PREDICTOR_ITERATIONS = 20
+#: The try before a predictor (:meth:`StepSolver._run_with_fallback`) gives up once this many
+#: Newton iterations in a row have not halved its best ||F||: a crawl the predictor cuts short.
+#: On the dragged block's hard step (its slip zone spreading over the face) 19 / 21 / 22 / 27
+#: Newton iterations on 64×16 / 128×32 / 256×64 / 512×128 cells became 13 / 15 / 16 / 21; the
+#: squeezed block's first step 19 → 15 and the rigid-and-compliant scene 109 → 106 in its run;
+#: every other step and the viscoplastic scratch benchmark took what they took (2: the dragged
+#: block's first dragging step, which converges in 6–7, went to the predictor: 10–12)
+CRAWL_ITERATIONS = 3
 #: A Newton iteration "stagnates" while ||F|| stays above this many times its best value in the
 #: step (see :meth:`StepSolver._converged`).
 STAGNATION_FACTOR = 10.0
@@ -431,6 +439,9 @@ class StepSolver:
         their best meanwhile (a plane-strain Perzyna cantilever, mixed: ||F|| within 10 % of
         ||F_0|| for 20 iterations, then converged at the 41st) and are left alone.
 
+        In a try that may stop where it crawls (``self._crawl_its``, see :meth:`_run_limited`),
+        ``crawl_its`` iterations in a row that have not halved the best ||F|| stop it too.
+
         The round-off stop also applies when ||F|| comes out the same to the last bit three
         times in a row: the iterate no longer moves. SNES VI's step, projected back onto the
         bounds, can leave it where it is while the step's own norm is not small: the scratch
@@ -696,8 +707,8 @@ class StepSolver:
         of contact; on a Signorini part 0: its extrapolated guess is kept only where it already
         solves the step) and, unconverged, SNES starts again from the other guess. Where a term
         has a predictor (Coulomb friction on a Signorini part: ``second_try`` = 10), that second
-        try is limited too and, unconverged, the step starts once more from the other guess
-        with the predictor (:meth:`_predictor`; not if ``predict`` is False). (Iterations of
+        try is limited too (and stops where it crawls, :data:`CRAWL_ITERATIONS`) and,
+        unconverged, the step starts once more from the other guess with the predictor (:meth:`_predictor`; not if ``predict`` is False). (Iterations of
         all count.)"""
         having = [term.has_fallback() for term in self._nodal]  # (collective: no short cut)
         if not any(having):
@@ -715,12 +726,8 @@ class StepSolver:
             if not predictors:
                 reason, more = self._run(self.snes)
                 return reason, first + more
-            import os
-            self._crawl_its = int(os.environ.get("CRAWL", "0"))
-            try:
-                reason, more = self._run_limited(max(t.second_try for t in predictors))
-            finally:
-                self._crawl_its = 0
+            reason, more = self._run_limited(max(t.second_try for t in predictors),
+                                             crawl_its=CRAWL_ITERATIONS)
             if reason > 0:
                 return reason, first + more
             self._fall_back(guess)
@@ -768,10 +775,16 @@ class StepSolver:
             reason, more = self._run(self.snes)
         return reason, its + more
 
-    def _run_limited(self, max_its: int) -> tuple[int, int]:
-        """:meth:`_run` with at most ``max_its`` Newton iterations (fewer if SNES allows fewer)."""
-        with self._snes_settings(max_its):
-            return self._run(self.snes)
+    def _run_limited(self, max_its: int, crawl_its: int = 0) -> tuple[int, int]:
+        """:meth:`_run` with at most ``max_its`` Newton iterations (fewer if SNES allows fewer);
+        with ``crawl_its``, stopped (diverged) once that many in a row have not halved the best
+        ||F|| (:data:`CRAWL_ITERATIONS`)."""
+        self._crawl_its = crawl_its
+        try:
+            with self._snes_settings(max_its):
+                return self._run(self.snes)
+        finally:
+            self._crawl_its = 0
 
     @contextlib.contextmanager
     def _snes_settings(self, max_its: Optional[int] = None, line_search: str = ""):
