@@ -263,7 +263,7 @@ class LaggedDirectSolve(_ReducedSolve):
         if not self._factored:
             # (a factorization PETSc flags as failed makes the substitution write inf: SNES
             # must see a failed linear solve, not a line search on an infinite direction)
-            ksp.setConvergedReason(_KSP_REASON.DIVERGED_PC_FAILED)
+            ksp.setConvergedReason(_KSP_REASON.DIVERGED_PCSETUP_FAILED)
             return
         ksp.setIterationNumber(1)
         ksp.setConvergedReason(_KSP_REASON.CONVERGED_ITS)
