@@ -76,7 +76,8 @@ StepArrays step_arrays(Model model, const InArray& sigma_old, const InArray& eps
   return step;
 }
 
-LocalCsr local_csr(const IndexArray& row_start, const IndexArray& columns, const InArray& values)
+LocalCsr local_csr(const IndexArray& row_start, const IndexArray& columns, const InArray& values,
+                   std::int64_t first_column)
 {
   if (row_start.ndim() != 1 || row_start.shape(0) < 1)
     throw std::invalid_argument("row_start: expected shape (rows + 1)");
@@ -84,7 +85,8 @@ LocalCsr local_csr(const IndexArray& row_start, const IndexArray& columns, const
   const py::ssize_t nnz = row_start.at(rows);
   check_shape(columns, {nnz}, "columns");
   check_shape(values, {nnz}, "values");
-  return {static_cast<std::size_t>(rows), row_start.data(), columns.data(), values.data()};
+  return {static_cast<std::size_t>(rows), row_start.data(), columns.data(), values.data(),
+          first_column};
 }
 
 // py::arg list shared by the stress updates.
@@ -261,13 +263,14 @@ PYBIND11_MODULE(_cpp, m)
       .def(
           "factorize",
           [](PatchSmoother& self, const IndexArray& row_start, const IndexArray& columns,
-             const InArray& values)
+             const InArray& values, std::int64_t first_column)
           {
-            const LocalCsr A = local_csr(row_start, columns, values);
+            const LocalCsr A = local_csr(row_start, columns, values, first_column);
             py::gil_scoped_release release;
             self.factorize(A);
           },
-          py::arg("row_start"), py::arg("columns"), py::arg("values"))
+          py::arg("row_start"), py::arg("columns"), py::arg("values"),
+          py::arg("first_column") = 0)
       .def(
           "apply",
           [](const PatchSmoother& self, const InArray& r, OutArray& y, double omega)

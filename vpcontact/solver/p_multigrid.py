@@ -40,6 +40,7 @@ keyed by the step solver's options prefix (the sub-PC's prefix starts with it).
 
 from __future__ import annotations
 
+import functools
 import weakref
 from typing import Optional
 
@@ -114,7 +115,13 @@ class CoarseSpace:
         self.interpolation = P
         self.block_size = self.V1.dofmap.index_map_bs
         self.modes = rigid_body_modes(self.V1)  # Cartesian: P carries the frames
-        self.stars = star_smoother.vertex_stars(V)
+        self._V = V
+
+    @functools.cached_property
+    def stars(self) -> tuple[np.ndarray, np.ndarray]:
+        """The vertex stars (found when a smoother first asks: below :data:`STARS_FROM` rows
+        none does)."""
+        return star_smoother.vertex_stars(self._V)
 
     def destroy(self) -> None:
         self.interpolation.destroy()

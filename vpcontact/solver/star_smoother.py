@@ -96,10 +96,7 @@ class StarSmoother:
     def set_operator(self, A: PETSc.Mat) -> None:
         """Factorize the stars' blocks of A (its owned rows; other processes' columns left out)."""
         row_start, columns, values = A.getValuesCSR()
-        first, last = A.getOwnershipRange()
-        local = columns.astype(np.int64) - first
-        local[(columns < first) | (columns >= last)] = -1
-        self._patches.factorize(row_start.astype(np.int64), local, values)
+        self._patches.factorize(row_start, columns, values, A.getOwnershipRange()[0])
 
     def solve(self, b: PETSc.Vec, y: PETSc.Vec) -> None:
         """y ← one sweep on A y = b from y = 0."""

@@ -99,8 +99,8 @@ class StepSolver:
             nodal terms to SNES's residual and Jacobian at x, ``predict(x)`` (the step's initial
             guess), ``has_fallback()``/``fallback(x)`` (another guess, see
             :meth:`_run_with_fallback`), ``second_try``/``freeze(stick)``/``thaw()`` (a
-            predictor from that guess, see :meth:`_predictor`), ``prepare_jacobian(x)`` (before the UFL Jacobian's
-            assembly) and ``current(x)`` (friction on Signorini parts, the obstacle's normals,
+            predictor from that guess, see :meth:`_predictor`), ``prepare_jacobian(x)``
+            (before the UFL Jacobian's assembly) and ``current(x)`` (friction on Signorini parts, the obstacle's normals,
             the sticking guess of friction on compliant parts;
             :class:`~vpcontact.model.nodal_terms.NodalTerm` has the defaults).
     """
@@ -708,8 +708,8 @@ class StepSolver:
         solves the step) and, unconverged, SNES starts again from the other guess. Where a term
         has a predictor (Coulomb friction on a Signorini part: ``second_try`` = 10), that second
         try is limited too (and stops where it crawls, :data:`CRAWL_ITERATIONS`) and,
-        unconverged, the step starts once more from the other guess with the predictor (:meth:`_predictor`; not if ``predict`` is False). (Iterations of
-        all count.)"""
+        unconverged, the step starts once more from the other guess with the predictor
+        (:meth:`_predictor`; not if ``predict`` is False). (Iterations of all count.)"""
         having = [term.has_fallback() for term in self._nodal]  # (collective: no short cut)
         if not any(having):
             return self._run(self.snes)
@@ -779,26 +779,26 @@ class StepSolver:
         """:meth:`_run` with at most ``max_its`` Newton iterations (fewer if SNES allows fewer);
         with ``crawl_its``, stopped (diverged) once that many in a row have not halved the best
         ||F|| (:data:`CRAWL_ITERATIONS`)."""
-        self._crawl_its = crawl_its
-        try:
-            with self._snes_settings(max_its):
-                return self._run(self.snes)
-        finally:
-            self._crawl_its = 0
+        with self._snes_settings(max_its, crawl_its=crawl_its):
+            return self._run(self.snes)
 
     @contextlib.contextmanager
-    def _snes_settings(self, max_its: Optional[int] = None, line_search: str = ""):
+    def _snes_settings(self, max_its: Optional[int] = None, line_search: str = "",
+                       crawl_its: int = 0):
         """SNES with at most ``max_its`` Newton iterations (None: as set; fewer if SNES allows
-        fewer) and the line search ``line_search`` (empty: the usual one, left alone) inside the
-        block; both restored after it."""
+        fewer), the line search ``line_search`` (empty: the usual one, left alone) and the crawl
+        stop after ``crawl_its`` iterations (0: none; see :meth:`_converged`) inside the block;
+        all restored after it."""
         if line_search:
             self._set_line_search(line_search)
         max_it = self.snes.getTolerances()[3]
         if max_its is not None:
             self.snes.setTolerances(max_it=min(max_its, max_it))
+        self._crawl_its = crawl_its
         try:
             yield
         finally:
+            self._crawl_its = 0
             if max_its is not None:
                 self.snes.setTolerances(max_it=max_it)
             if line_search:

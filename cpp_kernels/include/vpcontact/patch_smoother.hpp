@@ -19,14 +19,16 @@ namespace vpcontact
 {
 
 /// A compressed-row view of the local rows of a sparse matrix: row i's entries are
-/// columns[row_start[i] .. row_start[i+1]) with their values; a column index outside
-/// [0, num_rows) (another process's unknown) is skipped.
+/// columns[row_start[i] .. row_start[i+1]) with their values. Columns are global: column j
+/// is local row j - first_column, and one outside [0, num_rows) after that shift (another
+/// process's unknown) is skipped.
 struct LocalCsr
 {
   std::size_t num_rows = 0;
   const std::int64_t* row_start = nullptr;
   const std::int64_t* columns = nullptr;
   const double* values = nullptr;
+  std::int64_t first_column = 0;
 };
 
 /// Exact solves on overlapping patches of unknowns.
@@ -101,7 +103,7 @@ public:
       for (std::size_t a = 0; a < n; ++a)
         for (std::int64_t k = A.row_start[rows[a]]; k < A.row_start[rows[a] + 1]; ++k)
         {
-          const std::int64_t j = A.columns[k];
+          const std::int64_t j = A.columns[k] - A.first_column;
           if (j >= 0 && j < static_cast<std::int64_t>(num_rows_) && position_[j] >= 0)
             F[a * n + static_cast<std::size_t>(position_[j])] = A.values[k];
         }
@@ -115,7 +117,7 @@ public:
         {
           F[a * n + a] = 0.0;
           for (std::int64_t k = A.row_start[rows[a]]; k < A.row_start[rows[a] + 1]; ++k)
-            if (A.columns[k] == rows[a])
+            if (A.columns[k] - A.first_column == rows[a])
               F[a * n + a] = A.values[k];
         }
       }
