@@ -8,7 +8,10 @@ step is captured and solved again by GMRES (rtol 1e-4 and 1e-8, as the VI's lagg
 with each part of the field split swapped for its exact counterpart:
 
 * ``as_used``: one p-multigrid cycle on the displacement block A, three Chebyshev–Jacobi sweeps
-  on the weighted pressure mass S_p (vpcontact's solver);
+  on the weighted pressure mass S_p (vpcontact's solver: each point's shear compliance, capped
+  at 10 times that of its pressure nodes' patch mean stiffness);
+* ``cell_weights``: as used, but S_p weighted by each point's own compliance 1/(2G_eff) + 1/K,
+  uncapped (vpcontact's solver before the cap);
 * ``exact_A``: A factorized (MUMPS), S_p;
 * ``formed_schur``: one p-multigrid cycle on A, and the Schur complement C − B Ã⁻¹ Bᵀ of that
   cycle Ã formed column by column and factorized (far too dear to use: a diagnosis);
@@ -33,6 +36,7 @@ import sys
 import time
 from pathlib import Path
 
+from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -45,7 +49,8 @@ from vpcontact.solver import linear as linear_solvers  # noqa: E402
 from vpcontact.solver import vi_linear  # noqa: E402
 
 #: the exact counterparts: (A by MUMPS, Schur complement formed, other options) per variant
-VARIANTS = {"as_used": (False, False, {}), "exact_A": (True, False, {}),
+VARIANTS = {"as_used": (False, False, {}), "cell_weights": (False, False, {}),
+            "exact_A": (True, False, {}),
             "formed_schur": (False, True, {}), "exact_both": (True, True, {}),
             # the cycle's own parts: its P1 level solved exactly, or four smoothing sweeps
             "coarse_lu": (False, False, {"fieldsplit_u_pmg_coarse_pc_type": "lu",
@@ -81,11 +86,21 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
         if formed:
             pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.FULL)
         else:
-            pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, block.matrix)
+            pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, _schur_matrix(block, name))
         ksp.setUp()
         for sub in pc.getFieldSplitSubKSP():  # (with the options: as the lagged solver does)
             sub.setUp()
     return ksp
+
+
+def _schur_matrix(block, name: str) -> PETSc.Mat:
+    """S_p as used, or (``cell_weights``) weighted by each point's own compliance."""
+    if name != "cell_weights":
+        return block.matrix
+    form = block.fields.schur_preconditioner_form(block.scale, weights="cell")
+    matrix = fem_petsc.assemble_matrix(form)
+    matrix.assemble()
+    return matrix
 
 
 def measure(n: int, scheme: str, t0: float, sigma_y: float, variants) -> dict:

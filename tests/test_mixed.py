@@ -336,3 +336,62 @@ def test_auto_linear_solver_by_size_and_formulation():
         assert choose("iterative", 10, formulation) == "iterative"
     with pytest.raises(ValueError, match="must be one of"):
         choose("cg", 10)
+
+
+def _schur_diagonals(softness) -> tuple:
+    """The Schur preconditioner's diagonal, capped (as used) and uncapped, on a mixed cube whose
+    tangent is the elastic one times ``softness(x)`` in its deviatoric part; with the pressure
+    nodes' coordinates."""
+    import ufl
+    from dolfinx.fem import petsc as fem_petsc
+
+    msh = dmesh.create_box(COMM, [np.zeros(3), np.ones(3)], [4, 4, 4])
+    tags = tag_facets(msh, {1: lambda x: np.isclose(x[0], 0.0)})
+    elasticity = Elasticity("3d_standard", E, NU)
+    problem = QuasistaticProblem(msh, tags, Elastic(elasticity), formulation="mixed", degree=2,
+                                 dirichlet=[Dirichlet.clamped(1, 3)])
+    state, fields = problem.state, problem.fields
+    x = state.at_points(state.expression(ufl.SpatialCoordinate(msh)))
+    two_g = 2.0 * elasticity.shear_modulus
+    lam = elasticity.bulk_modulus - two_g / 3.0
+    tangent = state.tangent_view()
+    tangent[:] = lam * np.pad(np.ones((3, 3)), ((0, 3), (0, 3)))
+    tangent += two_g * softness(x)[:, None, None] * np.eye(6)
+    diagonals = []
+    for weights in ("capped", "cell"):
+        form = fields.schur_preconditioner_form(1.0, weights=weights)
+        if weights == "capped":
+            fields.update_schur_weight()
+        matrix = fem_petsc.assemble_matrix(form)
+        matrix.assemble()
+        diagonals.append(-matrix.getDiagonal().array)
+        matrix.destroy()
+    owned = fields.Q.dofmap.index_map.size_local
+    return diagonals[0], diagonals[1], fields.Q.tabulate_dof_coordinates()[:owned]
+
+
+def test_schur_weight_is_capped_where_a_thin_zone_flows_and_only_there():
+    """The weighted pressure mass matrix of the field split takes each point's shear compliance,
+    but at most 10 times that of the mean stiffness of its pressure nodes' cells: a layer one cell
+    thick whose tangent is 10⁴ times softer (a thin flowing zone) gets diagonal entries hundreds
+    of times below the uncapped ones at its nodes (bench/field_split_parts.py: the uncapped
+    matrix cost GMRES an iteration per such node); a uniformly soft body, and nodes whose cells
+    are all as soft as their neighbours, keep the uncapped entries."""
+    soft = 1e-4
+    capped, cell, xq = _schur_diagonals(lambda x: np.full(len(x), soft))
+    assert np.allclose(capped, cell, rtol=1e-12, atol=0.0)
+
+    thin = lambda x: np.where((x[:, 2] > 0.5) & (x[:, 2] < 0.75), soft, 1.0)  # noqa: E731
+    capped, cell, xq = _schur_diagonals(thin)
+    layer = np.isclose(xq[:, 2], 0.5) | np.isclose(xq[:, 2], 0.75)
+    far = (xq[:, 2] < 0.3) | np.isclose(xq[:, 2], 1.0)
+    assert layer.any() and far.any() or COMM.size > 1
+    if layer.any():
+        assert (cell[layer] / capped[layer]).min() > 100.0, (cell[layer] / capped[layer]).min()
+    assert np.allclose(capped[far], cell[far], rtol=1e-12, atol=0.0)
+
+    wide = lambda x: np.where(x[:, 2] < 0.5, soft, 1.0)  # noqa: E731
+    capped, cell, xq = _schur_diagonals(wide)
+    inside = np.isclose(xq[:, 2], 0.0)
+    assert np.allclose(capped[inside], cell[inside], rtol=1e-12, atol=0.0)
+    assert COMM.allreduce(int(inside.sum())) > 0

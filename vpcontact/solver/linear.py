@@ -8,9 +8,10 @@ every tangent, but its cost grows like unknowns^1.4–1.5 in 3-D and its memory 
 ``iterative``: for the displacement formulation, GMRES with algebraic multigrid (GAMG, the
 rigid-body modes as near null space). For the mixed formulation, FGMRES with a block
 preconditioner (PCFIELDSPLIT, Schur complement factorization): one two-level p-multigrid
-cycle on the displacement block (Chebyshev–Jacobi on P2, a P1 Galerkin coarse problem under
-GAMG: :mod:`vpcontact.solver.p_multigrid`) and, for the Schur complement, the pressure mass matrix weighted by 1/(2G_eff) + 1/K
-from the current tangent (:meth:`~vpcontact.model.fields.DisplacementPressure.
+cycle on the displacement block (Chebyshev–Jacobi or vertex stars on P2, a P1 Galerkin coarse
+problem under GAMG: :mod:`vpcontact.solver.p_multigrid`) and, for the Schur complement, the
+pressure mass matrix weighted by the current tangent's shear compliance (capped where a thin
+zone flows) + 1/K (:meth:`~vpcontact.model.fields.DisplacementPressure.
 schur_preconditioner_form`). The displacement block no longer carries the bulk modulus, so
 multigrid works on it even where the body flows (where P1 or P2 displacements alone make every
 algebraic multigrid fail: the tangent is nearly incompressible). Inside SNES VI the same
@@ -130,6 +131,7 @@ class BlockPreconditioner:
         #: the lagged VI solver that applies this preconditioner (set by the step solver), or
         #: None; expired with every Jacobian (:data:`REBUILD_WITH_EVERY_JACOBIAN`)
         self.solver = None
+        self.scale = scale
         self._form = fields.schur_preconditioner_form(scale)
         self.matrix = fem_petsc.create_matrix(self._form)
         self._assemble_matrix = fem_petsc.assemble_matrix
@@ -137,6 +139,7 @@ class BlockPreconditioner:
     def update(self) -> None:
         """Reassemble the Schur preconditioner from the current tangent (and have the lagged
         VI solver rebuild the field split at its next solve)."""
+        self.fields.update_schur_weight()
         self.matrix.zeroEntries()
         self._assemble_matrix(self.matrix, self._form)
         self.matrix.assemble()
