@@ -331,12 +331,16 @@ def test_a_slip_zone_spreading_over_a_fine_face_is_predicted_by_tresca():
     Tresca predictor (every pressed node stuck, then the thresholds fixed at that iterate's,
     then Coulomb: NodalFriction.freeze): 22 iterations in all (19 / 21 on the coarser meshes,
     27 and no cut on 512×128). Now that second try also stops once 3 iterations have not
-    halved its residual (step_solver.CRAWL_ITERATIONS): 16 (13 / 15, and 21 on 512×128). The
-    block slides with the Coulomb ratio."""
+    halved its residual (step_solver.CRAWL_ITERATIONS): 16 (13 / 15, and 21 on 512×128). Most
+    of the crawl was three nodes at the face's trailing end, whose cones had shrunk under their
+    old forces, thrown across their stick intervals one way and back; linearised on the stick
+    branch while that brings them nearer their cones (NodalFriction._unloading), the step
+    converges from the sticking guess in 10 (7 / 8, and 12 on 512×128 with SECOND_TRY = 15),
+    no other step moving. The block slides with the Coulomb ratio."""
     problem = _signorini_block(Friction("coulomb", coefficient=0.3), cells=(256, 64))
     its = [step.newton_iterations for step in advance(problem, 1.0, StepControl(0.05))]
     assert len(its) == 20 and problem.solver.total_iterations == sum(its), its  # no step cut
-    assert max(its) <= 18, its
+    assert max(its) <= 11, its
     _, force = problem.support_forces()
     assert -force[0] == pytest.approx(0.3 * force[1], rel=1e-8), force
 

@@ -48,6 +48,22 @@ linearised on the stick branch — unless the obstacle moves along it in the ste
 sweeping past: there the slip branch is the right first guess, and the stick one cost the
 scratch demo 0.8 iterations per dragging step). The reversals now take 3 / 2 / 2.
 
+Unloading nodes: a node whose cone has shrunk under its old force (λ fell: the trailing end of
+a dragged block's face, which slipped outwards while it was pressed) starts beyond it, and its
+return mapping says slip, with the zero 2-D tangent, although what the node does is move along
+its force until it is back inside (its slip over the step points along its trial force:
+Δũ_τ · t_trial > 0, i.e. b < |t_trial| < f_{n−1} · t̂). Newton threw such nodes across the
+stick interval (2b/k, here about 1e−6 of a drag step of 1e−3) one way and back for 20 iterations
+while the rest of the face had converged. Such a node is now linearised on the stick branch,
+as long as that brings it nearer its cone: held again at the next iteration only if its excess
+|t_trial| − b has fallen, and released to the slip branch otherwise (a node that does slip in
+the end, a corner that keeps slipping outwards, would otherwise crawl to its slip on the
+stiff stick tangent). Not where the obstacle moves along the node (as for reversals). While
+such nodes are held the step solver's crawl stop waits (:attr:`NodalFriction.holding`). The
+dragged block's hard step (its slip zone spreading over the face, README) took 13 / 15 / 16 / 21
+Newton iterations on 64×16 / 128×32 / 256×64 / 512×128 cells and takes 7 / 8 / 10 / 12, none
+through the Tresca predictor; every other step of the friction tests takes what it took.
+
 Any Lagrange degree and either field layout (:mod:`vpcontact.model.fields`): Coulomb's threshold
 𝔣 λ_i needs no area, and friction acts on the displacement unknowns only, found in SNES's vector
 through the layout's ``field_indices()`` (the pressure unknowns of the mixed formulation get no
@@ -76,8 +92,10 @@ from vpcontact.model.nodal_terms import ON_BOUND, NodalTerm
 #: Newton iterations a Coulomb step may take from the sticking guess before the Tresca
 #: predictor (:meth:`NodalFriction.freeze`) starts it again: above the 7–9 of the hardest steps
 #: that converge from it (the dragged block's first pressing step on 256×64 and 512×128
-#: cells), below the crawl of the ones that do not (12–36, README)
-SECOND_TRY = 10
+#: cells, and since unloading nodes stick, its hard dragging step: 10 and 12), below the crawl
+#: of the ones that did not (12–36, README), which the crawl stop
+#: (:data:`~vpcontact.solver.step_solver.CRAWL_ITERATIONS`) now cuts short anyway
+SECOND_TRY = 15
 
 
 class NodalFriction(NodalTerm):
@@ -114,6 +132,9 @@ class NodalFriction(NodalTerm):
         self._drive_row: Optional[int] = None   # δ's global row in SNES's vector
         self._d_old = 0.0                        # the obstacle's d at the last step
         self._frozen: Optional[np.ndarray] = None  # the predictor's thresholds (see freeze)
+        self._excess: Optional[np.ndarray] = None  # |t| − b of the unloading nodes held (see
+        #                                            _unloading; NaN: not held) in this solve
+        self.holding = False  # some held at the last Jacobian (all ranks)
 
     def bind(self, scale: float, dirichlet_dofs: np.ndarray, layout) -> None:
         """See :meth:`NodalTerm.bind`; also the row of a force-driven obstacle's unknown."""
@@ -144,6 +165,20 @@ class NodalFriction(NodalTerm):
         if self.friction.type == "coulomb":
             return self.friction.coefficient * lam
         return self.friction.bound_at(lam, self.part.nodes.points) * self.areas
+
+    def _unloading(self, st: dict, moving: np.ndarray) -> np.ndarray:
+        """The nodes beyond their cone that move along their trial force (Δũ_τ · t_trial > 0:
+        the cone shrank under the old force, see the module docstring), touching since the
+        step's start, the obstacle not moving along them, and, if held at the last Jacobian of
+        this solve, now nearer their cone: linearised on the stick branch. Remembers their
+        excess |t_trial| − b for the next Jacobian."""
+        excess = np.linalg.norm(st["trial"], axis=1) - st["bound"]
+        along = (st["beyond"] & self.touching & ~moving
+                 & (np.einsum("nt,nt->n", st["slip"], st["trial"]) > 0))
+        if self._excess is not None:
+            along &= np.isnan(self._excess) | (excess < self._excess)
+        self._excess = np.where(along, excess, np.nan)
+        return along
 
     def move(self, delta: np.ndarray) -> None:
         """The obstacle's points at the nodes move by ``delta`` (N, 3) over the step (a
@@ -188,8 +223,12 @@ class NodalFriction(NodalTerm):
         landing = ~self.touching
         # at the step's initial guess, a node the obstacle does not move along is linearised on
         # the stick branch (see the module docstring: reversals)
-        holds = (np.all(xs[self.tangential] == self._predicted, axis=1)
-                 & ~np.any(self._shift(), axis=1))
+        moving = np.any(self._shift(), axis=1)
+        holds = np.all(xs[self.tangential] == self._predicted, axis=1) & ~moving
+        unloading = self._unloading(st, moving)
+        holds |= unloading
+        # (the crawl stop waits while unloading nodes are held: step_solver.CRAWL_ITERATIONS)
+        self.holding = self.comm.allreduce(bool(unloading.any()), op=MPI.LOR)
         driven = self._drive is not None
         # one (node, tangential slot a, global columns, values of ∂b_τa/∂x̃_col) per row piece
         entries = []
@@ -273,6 +312,7 @@ class NodalFriction(NodalTerm):
         starts again sticking (:meth:`fallback`). Where another term asks for a longer first
         try (friction on a compliant part in the same scene), this part sticks from the start."""
         self._predicted[:] = np.nan
+        self._excess = None
         if first_try > 0:
             self.fallback(x)
 
@@ -296,6 +336,7 @@ class NodalFriction(NodalTerm):
         stuck = self.x_old + self._shift() / self.scale
         values[self.tangential] = np.where(held, stuck, values[self.tangential])
         self._predicted = values[self.tangential].copy()
+        self._excess = None
 
     @property
     def second_try(self) -> Optional[int]:
@@ -313,10 +354,12 @@ class NodalFriction(NodalTerm):
         (README: the dragged block on 256×64 cells, 35 iterations → 22)."""
         self._frozen = (np.full(len(self._lam), np.inf) if stick
                         else self.friction.coefficient * self._lam)
+        self._excess = None
 
     def thaw(self) -> None:
         """Coulomb's own thresholds again (see :meth:`freeze`)."""
         self._frozen = None
+        self._excess = None
 
     def commit(self, x: np.ndarray) -> None:
         """The step is accepted at x (SNES units; λ of the last residual, evaluated there)."""

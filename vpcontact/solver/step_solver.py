@@ -44,7 +44,11 @@ PREDICTOR_ITERATIONS = 20
 #: Newton iterations on 64×16 / 128×32 / 256×64 / 512×128 cells became 13 / 15 / 16 / 21; the
 #: squeezed block's first step 19 → 15 and the rigid-and-compliant scene 109 → 106 in its run;
 #: every other step and the viscoplastic scratch benchmark took what they took (2: the dragged
-#: block's first dragging step, which converges in 6–7, went to the predictor: 10–12)
+#: block's first dragging step, which converges in 6–7, went to the predictor: 10–12). Not
+#: while a term is still bringing nodes back into their cones (``holding``: friction's
+#: unloading nodes, :meth:`~vpcontact.model.nodal_friction.NodalFriction._unloading`): on
+#: 512×128 cells the hard step converges at the 12th iteration, and stopped at the 11th, it
+#: took 31 through the predictor
 CRAWL_ITERATIONS = 3
 #: A Newton iteration "stagnates" while ||F|| stays above this many times its best value in the
 #: step (see :meth:`StepSolver._converged`).
@@ -440,7 +444,8 @@ class StepSolver:
         ||F_0|| for 20 iterations, then converged at the 41st) and are left alone.
 
         In a try that may stop where it crawls (``self._crawl_its``, see :meth:`_run_limited`),
-        ``crawl_its`` iterations in a row that have not halved the best ||F|| stop it too.
+        ``crawl_its`` iterations in a row that have not halved the best ||F|| stop it too, unless
+        a nodal term is ``holding`` at the last Jacobian (see :data:`CRAWL_ITERATIONS`).
 
         The round-off stop also applies when ||F|| comes out the same to the last bit three
         times in a row: the iterate no longer moves. SNES VI's step, projected back onto the
@@ -475,7 +480,8 @@ class StepSolver:
             # (or the same ||F||, to the last bit, three times: the iterate no longer moves —
             # SNES VI projecting each step back onto the bounds)
             return _SNES_REASON.CONVERGED_SNORM_RELATIVE
-        if self._crawl_its and it - self._halved_at >= self._crawl_its:
+        if (self._crawl_its and it - self._halved_at >= self._crawl_its
+                and not any(getattr(term, "holding", False) for term in self._nodal)):
             return _SNES_REASON.DIVERGED_DTOL
         if self._stagnation_its and self._above >= self._stagnation_its:
             self.stagnated = True
