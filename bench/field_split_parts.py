@@ -36,6 +36,8 @@ import sys
 import time
 from pathlib import Path
 
+import ufl
+from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
@@ -97,7 +99,10 @@ def _schur_matrix(block, name: str) -> PETSc.Mat:
     """S_p as used, or (``cell_weights``) weighted by each point's own compliance."""
     if name != "cell_weights":
         return block.matrix
-    form = block.fields.schur_preconditioner_form(block.scale, weights="cell")
+    fields = block.fields
+    q, dp = ufl.TestFunction(fields.Q), ufl.TrialFunction(fields.Q)
+    weight = 1.0 / fields.shear_stiffness() + fields.inverse_bulk
+    form = fem.form(-(fields.beta ** 2 * block.scale) * weight * dp * q * fields.measure)
     matrix = fem_petsc.assemble_matrix(form)
     matrix.assemble()
     return matrix

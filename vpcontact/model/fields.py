@@ -38,6 +38,7 @@ from __future__ import annotations
 import math
 from typing import Optional, Protocol
 
+import numpy as np
 import ufl
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
@@ -52,7 +53,7 @@ from vpcontact.model.tensors import mandel_strain
 #: the Schur preconditioner's compliance at a point is at most this many times that of the mean
 #: shear stiffness of the cells around each pressure node (see
 #: :meth:`DisplacementPressure.schur_preconditioner_form`; at the onset of flow on 44 508
-#: unknowns 3 and 10 measured alike, 16 GMRES iterations against 38 uncapped, 30 gave 19)
+#: unknowns 3 and 10 measured alike, 16 GMRES iterations against 39 uncapped, 30 gave 19)
 SCHUR_CONTRAST = 10.0
 
 
@@ -222,7 +223,7 @@ class DisplacementPressure:
         self.Q = fem.FunctionSpace(mesh, (family, 1))
         self.p = fem.Function(self.Q, name="pressure")
         self.functions = (u, self.p)
-        self._dx = state.measure
+        self.measure = state.measure  # the stress quadrature's dx
         self.bulk = el.bulk_modulus
         self.kernel_bulk = el.kernel_bulk_modulus()
         cells = mesh.topology.index_map(self.dim)
@@ -231,7 +232,8 @@ class DisplacementPressure:
             op=MPI.SUM)
         h = (volume / cells.size_global) ** (1.0 / self.dim)
         self.beta = 2.0 * el.shear_modulus / h
-        self._inv_bulk = fem.Constant(mesh, 0.0 if math.isinf(self.bulk) else 1.0 / self.bulk)
+        #: 1/K (0 for incompressible elasticity), UFL
+        self.inverse_bulk = fem.Constant(mesh, 0.0 if math.isinf(self.bulk) else 1.0 / self.bulk)
         self._beta = fem.Constant(mesh, self.beta)
         self._Kq = fem.Constant(mesh, self.kernel_bulk)
         # Initial state: m_0 and tr ε_0 per quadrature point (zero unless set).
@@ -239,6 +241,7 @@ class DisplacementPressure:
         self.mean_stress_0 = fem.Function(space, name="mean_stress_0")
         self.trace_strain_0 = fem.Function(space, name="trace_strain_0")
         self.F = self.J = None
+        self._patch_stiffness: Optional[fem.Function] = None  # 2Ḡ (schur_preconditioner_form)
         self._maps = [(V.dofmap.index_map, V.dofmap.index_map_bs),
                       (self.Q.dofmap.index_map, 1)]
         self._owned = [m.size_local * bs for m, bs in self._maps]
@@ -266,16 +269,16 @@ class DisplacementPressure:
         return ufl.dot(tangent_q, mandel_strain(du, self.dim)) - self._Kq * self._trace(du) * e
 
     def compile(self, residual_u, jacobian_uu) -> None:
-        dx = self._dx
+        dx = self.measure
         v = residual_u.arguments()[0]
         q, dp = ufl.TestFunction(self.Q), ufl.TrialFunction(self.Q)
         du = jacobian_uu.arguments()[1]
         e = self.identity()
         residual_p = self._beta * (self._trace(self.u) - self.trace_strain_0
-                                   - (self.p - self.mean_stress_0) * self._inv_bulk) * q * dx
+                                   - (self.p - self.mean_stress_0) * self.inverse_bulk) * q * dx
         j_up = dp * ufl.dot(e, mandel_strain(v, self.dim)) * dx
         j_pu = self._beta * self._trace(du) * q * dx
-        j_pp = -self._beta * self._inv_bulk * dp * q * dx
+        j_pp = -self._beta * self.inverse_bulk * dp * q * dx
         self.F = [fem.form(residual_u), fem.form(residual_p)]
         self.J = [[fem.form(jacobian_uu), fem.form(j_up)], [fem.form(j_pu), fem.form(j_pp)]]
 
@@ -359,7 +362,7 @@ class DisplacementPressure:
         return self.correction()
 
     # -- the Schur complement's preconditioner ---------------------------------------------
-    def _shear_stiffness(self):
+    def shear_stiffness(self):
         """2G_eff of the kernels' tangent C (UFL): its trace on the complement of the identity
         1, per dimension there — 2G for isotropic elasticity, ~μ*/k where a Perzyna point
         flows."""
@@ -368,13 +371,14 @@ class DisplacementPressure:
         trace = sum(C[i, i] for i in range(size))
         return (trace - ufl.dot(e, ufl.dot(C, e)) / ufl.dot(e, e)) / (size - 1)
 
-    def schur_preconditioner_form(self, scale: float, weights: str = "capped"):
+    def schur_preconditioner_form(self, scale: float):
         """S_p = −β² s ∫ (w + 1/K) dp q dx: the pressure mass matrix weighted like the Schur
         complement −β² s (B A⁻¹ Bᵀ + M/K) of the Jacobian in SNES's units (the analogue of the
         inverse-viscosity mass matrix of variable-viscosity Stokes), with the compliance
         w = min(1/(2G_eff), c/(2Ḡ)): each point's own, but at most :data:`SCHUR_CONTRAST`
         times that of 2Ḡ, the shear stiffness averaged over the cells of each pressure node
-        (:meth:`update_schur_weight`, which must run before each assembly).
+        (:meth:`update_schur_weight`, which must run before each assembly; the forms this
+        returns share that one field).
 
         Why the cap: a pressure unknown loads the displacement unknowns of its node's cells, and
         those are held by every cell around them. Where a thin zone flows (the contact edge at
@@ -383,25 +387,20 @@ class DisplacementPressure:
         lay 25 times below it — and GMRES paid about one iteration per such node; inside a wide
         flowing region the points and their patches agree and the cap does not act (where it
         did, with the patch mean alone, GMRES took 40 % more iterations:
-        bench/field_split_parts.py). ``weights = "cell"`` gives the uncapped matrix (for the
-        benchmark's comparison)."""
+        bench/field_split_parts.py, which also builds the uncapped matrix)."""
         q, dp = ufl.TestFunction(self.Q), ufl.TrialFunction(self.Q)
-        factor = -(self.beta ** 2 * scale)
-        if weights not in ("capped", "cell"):
-            raise ValueError(f"weights must be 'capped' or 'cell', got {weights!r}")
-        if weights == "cell":
-            weight = 1.0 / self._shear_stiffness() + self._inv_bulk
-            return fem.form(factor * weight * dp * q * self._dx)
-        self._patch_stiffness = fem.Function(self.Q, name="patch_shear_stiffness")
-        self._patch_stiffness.x.array[:] = 1.0
-        self._stiffness_moment = fem.form(self._shear_stiffness() * q * self._dx)
-        volume = fem_petsc.assemble_vector(fem.form(q * self._dx))
-        volume.ghostUpdate(PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
-        self._patch_volume = volume.array.copy()
-        volume.destroy()
-        compliance = ufl.min_value(1.0 / self._shear_stiffness(),
+        if self._patch_stiffness is None:
+            self._patch_stiffness = fem.Function(self.Q, name="patch_shear_stiffness")
+            self._patch_stiffness.x.array[:] = np.nan  # (until update_schur_weight)
+            self._stiffness_moment = fem.form(self.shear_stiffness() * q * self.measure)
+            volume = fem_petsc.assemble_vector(fem.form(q * self.measure))
+            volume.ghostUpdate(PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
+            self._patch_volume = volume.array.copy()
+            volume.destroy()
+        compliance = ufl.min_value(1.0 / self.shear_stiffness(),
                                    SCHUR_CONTRAST / self._patch_stiffness)
-        return fem.form(factor * (compliance + self._inv_bulk) * dp * q * self._dx)
+        factor = -(self.beta ** 2 * scale)
+        return fem.form(factor * (compliance + self.inverse_bulk) * dp * q * self.measure)
 
     def update_schur_weight(self) -> None:
         """2Ḡ at each pressure node: ∫ 2G_eff φ_i dx / ∫ φ_i dx of the current tangent (the

@@ -53,16 +53,17 @@ a dragged block's face, which slipped outwards while it was pressed) starts beyo
 return mapping says slip, with the zero 2-D tangent, although what the node does is move along
 its force until it is back inside (its slip over the step points along its trial force:
 Δũ_τ · t_trial > 0, i.e. b < |t_trial| < f_{n−1} · t̂). Newton threw such nodes across the
-stick interval (2b/k, here about 1e−6 of a drag step of 1e−3) one way and back for 20 iterations
-while the rest of the face had converged. Such a node is now linearised on the stick branch,
-as long as that brings it nearer its cone: held again at the next iteration only if its excess
-|t_trial| − b has fallen, and released to the slip branch otherwise (a node that does slip in
-the end, a corner that keeps slipping outwards, would otherwise crawl to its slip on the
-stiff stick tangent). Not where the obstacle moves along the node (as for reversals). While
-such nodes are held the step solver's crawl stop waits (:attr:`NodalFriction.holding`). The
-dragged block's hard step (its slip zone spreading over the face, README) took 13 / 15 / 16 / 21
-Newton iterations on 64×16 / 128×32 / 256×64 / 512×128 cells and takes 7 / 8 / 10 / 12, none
-through the Tresca predictor; every other step of the friction tests takes what it took.
+stick interval (2b/k, about 1.5e−6, against Newton steps of 1e−5) one way and back for 20
+iterations while the rest of the face had converged. Such a node is now linearised on the stick
+branch, as long as that brings it nearer its cone: held again at the next iteration only if its
+excess |t_trial| − b has fallen, and otherwise released to the slip branch for the rest of the
+solve (a node that does slip in the end, a corner that keeps slipping outwards, would otherwise
+crawl to its slip on the stiff stick tangent). Not where the obstacle moves along the node (as
+for reversals). While such nodes are held the step solver's crawl stop waits
+(:attr:`NodalTerm.holding`). The dragged block's hard step (its slip zone spreading over the
+face, README) took 13 / 15 / 16 / 21 Newton iterations on 64×16 / 128×32 / 256×64 / 512×128
+cells and takes 7 / 8 / 10 / 12, none through the Tresca predictor; every other step of the
+friction tests takes what it took.
 
 Any Lagrange degree and either field layout (:mod:`vpcontact.model.fields`): Coulomb's threshold
 𝔣 λ_i needs no area, and friction acts on the displacement unknowns only, found in SNES's vector
@@ -133,8 +134,7 @@ class NodalFriction(NodalTerm):
         self._d_old = 0.0                        # the obstacle's d at the last step
         self._frozen: Optional[np.ndarray] = None  # the predictor's thresholds (see freeze)
         self._excess: Optional[np.ndarray] = None  # |t| − b of the unloading nodes held (see
-        #                                            _unloading; NaN: not held) in this solve
-        self.holding = False  # some held at the last Jacobian (all ranks)
+        #                                  _unloading; NaN: not held, −∞: released) in this solve
 
     def bind(self, scale: float, dirichlet_dofs: np.ndarray, layout) -> None:
         """See :meth:`NodalTerm.bind`; also the row of a force-driven obstacle's unknown."""
@@ -170,14 +170,19 @@ class NodalFriction(NodalTerm):
         """The nodes beyond their cone that move along their trial force (Δũ_τ · t_trial > 0:
         the cone shrank under the old force, see the module docstring), touching since the
         step's start, the obstacle not moving along them, and, if held at the last Jacobian of
-        this solve, now nearer their cone: linearised on the stick branch. Remembers their
-        excess |t_trial| − b for the next Jacobian."""
+        this solve, now nearer their cone: linearised on the stick branch; a held node that is
+        not nearer is released to the slip branch for the rest of the solve. Remembers the
+        held nodes' excess |t_trial| − b (−∞: released) for the next Jacobian."""
         excess = np.linalg.norm(st["trial"], axis=1) - st["bound"]
         along = (st["beyond"] & self.touching & ~moving
                  & (np.einsum("nt,nt->n", st["slip"], st["trial"]) > 0))
+        released = np.zeros_like(along)
         if self._excess is not None:
-            along &= np.isnan(self._excess) | (excess < self._excess)
-        self._excess = np.where(along, excess, np.nan)
+            released = self._excess == -np.inf
+            held = ~np.isnan(self._excess) & ~released
+            released |= held & (excess >= self._excess)  # (not nearer: slip from now on)
+            along &= ~released
+        self._excess = np.where(along, excess, np.where(released, -np.inf, np.nan))
         return along
 
     def move(self, delta: np.ndarray) -> None:
@@ -313,6 +318,7 @@ class NodalFriction(NodalTerm):
         try (friction on a compliant part in the same scene), this part sticks from the start."""
         self._predicted[:] = np.nan
         self._excess = None
+        self.holding = False
         if first_try > 0:
             self.fallback(x)
 
@@ -337,6 +343,7 @@ class NodalFriction(NodalTerm):
         values[self.tangential] = np.where(held, stuck, values[self.tangential])
         self._predicted = values[self.tangential].copy()
         self._excess = None
+        self.holding = False
 
     @property
     def second_try(self) -> Optional[int]:
@@ -355,11 +362,13 @@ class NodalFriction(NodalTerm):
         self._frozen = (np.full(len(self._lam), np.inf) if stick
                         else self.friction.coefficient * self._lam)
         self._excess = None
+        self.holding = False
 
     def thaw(self) -> None:
         """Coulomb's own thresholds again (see :meth:`freeze`)."""
         self._frozen = None
         self._excess = None
+        self.holding = False
 
     def commit(self, x: np.ndarray) -> None:
         """The step is accepted at x (SNES units; λ of the last residual, evaluated there)."""

@@ -129,3 +129,8 @@ class NodalTerm:
 
     def thaw(self) -> None:
         """The term's own law again (see :meth:`freeze`)."""
+
+    #: True while the term's last Jacobian held nodes that are still on their way to a
+    #: solution (friction's unloading nodes): the step solver's crawl stop then waits (same on
+    #: every rank; :data:`~vpcontact.solver.step_solver.CRAWL_ITERATIONS`)
+    holding: bool = False

@@ -103,7 +103,8 @@ class StepSolver:
             nodal terms to SNES's residual and Jacobian at x, ``predict(x)`` (the step's initial
             guess), ``has_fallback()``/``fallback(x)`` (another guess, see
             :meth:`_run_with_fallback`), ``second_try``/``freeze(stick)``/``thaw()`` (a
-            predictor from that guess, see :meth:`_predictor`), ``prepare_jacobian(x)``
+            predictor from that guess, see :meth:`_predictor`; ``holding``: the crawl stop
+            waits, :data:`CRAWL_ITERATIONS`), ``prepare_jacobian(x)``
             (before the UFL Jacobian's assembly) and ``current(x)`` (friction on Signorini parts, the obstacle's normals,
             the sticking guess of friction on compliant parts;
             :class:`~vpcontact.model.nodal_terms.NodalTerm` has the defaults).
@@ -481,7 +482,7 @@ class StepSolver:
             # SNES VI projecting each step back onto the bounds)
             return _SNES_REASON.CONVERGED_SNORM_RELATIVE
         if (self._crawl_its and it - self._halved_at >= self._crawl_its
-                and not any(getattr(term, "holding", False) for term in self._nodal)):
+                and not any(term.holding for term in self._nodal)):
             return _SNES_REASON.DIVERGED_DTOL
         if self._stagnation_its and self._above >= self._stagnation_its:
             self.stagnated = True
@@ -712,7 +713,7 @@ class StepSolver:
         on a compliant part: 5, :data:`~vpcontact.model.friction.FIRST_TRY`, or 8 at the onset
         of contact; on a Signorini part 0: its extrapolated guess is kept only where it already
         solves the step) and, unconverged, SNES starts again from the other guess. Where a term
-        has a predictor (Coulomb friction on a Signorini part: ``second_try`` = 10), that second
+        has a predictor (Coulomb friction on a Signorini part: ``second_try`` = 15), that second
         try is limited too (and stops where it crawls, :data:`CRAWL_ITERATIONS`) and,
         unconverged, the step starts once more from the other guess with the predictor
         (:meth:`_predictor`; not if ``predict`` is False). (Iterations of all count.)"""
