@@ -322,6 +322,21 @@ def test_signorini_full_slip(kind):
     assert problem.contact_monitor.report().active > 10
 
 
+def _count_predictor_runs(monkeypatch) -> list:
+    """A list that grows by one entry each time a step goes through the Tresca predictor."""
+    from vpcontact.solver import step_solver
+
+    predicted = []
+    original = step_solver.StepSolver._predictor
+
+    def counted(solver, terms):
+        predicted.append(True)
+        return original(solver, terms)
+
+    monkeypatch.setattr(step_solver.StepSolver, "_predictor", counted)
+    return predicted
+
+
 def test_a_slip_zone_spreading_over_a_fine_face_converges_from_the_sticking_guess(monkeypatch):
     """The dragged block on a rigid floor on 256×64 cells, k = 0.05 (bench/friction_step.py
     --floor rigid). In the second dragging step the slip zone spreads over the whole face; from
@@ -337,16 +352,7 @@ def test_a_slip_zone_spreading_over_a_fine_face_converges_from_the_sticking_gues
     branch while that brings them nearer their cones (NodalFriction._unloading), the step
     converges from the sticking guess in 10 (7 / 8, and 12 on 512×128 with SECOND_TRY = 15),
     no other step moving. The block slides with the Coulomb ratio."""
-    from vpcontact.solver import step_solver
-
-    predicted = []
-    original = step_solver.StepSolver._predictor
-
-    def counted(solver, terms):
-        predicted.append(True)
-        return original(solver, terms)
-
-    monkeypatch.setattr(step_solver.StepSolver, "_predictor", counted)
+    predicted = _count_predictor_runs(monkeypatch)
     problem = _signorini_block(Friction("coulomb", coefficient=0.3), cells=(256, 64))
     its = [step.newton_iterations for step in advance(problem, 1.0, StepControl(0.05))]
     assert len(its) == 20 and problem.solver.total_iterations == sum(its), its  # no step cut
@@ -952,7 +958,6 @@ def test_the_tresca_predictor_ends_at_the_coulomb_solution(discretization, monke
     — forces and displacements equal to round-off (measured 2e−14 and 6e−13; P1 8 iterations in
     such steps against 5, mixed 9–28 against 6), with no step cut."""
     from vpcontact.model import nodal_friction
-    from vpcontact.solver import step_solver
 
     def run():
         floor = Signorini(2, obstacle=lambda x: x[2], max_distance=1.0,
@@ -963,14 +968,7 @@ def test_the_tresca_predictor_ends_at_the_coulomb_solution(discretization, monke
         return its, force, problem.u.x.array.copy()
 
     usual = run()
-    predicted = []
-    original = step_solver.StepSolver._predictor
-
-    def counted(solver, terms):
-        predicted.append(True)
-        return original(solver, terms)
-
-    monkeypatch.setattr(step_solver.StepSolver, "_predictor", counted)
+    predicted = _count_predictor_runs(monkeypatch)
     monkeypatch.setattr(nodal_friction, "SECOND_TRY", 0)
     through = run()
     assert len(predicted) >= 5 and len(through[0]) == 10, through[0]
