@@ -144,7 +144,7 @@ ONSET_TRY = 8
 class StickingGuess:
     """A step's second guess on a normal-compliance part with friction: sticking (a nodal term of
     the step solver: hooks ``bind``, ``predict``, ``has_fallback``, ``fallback``,
-    ``prepare_jacobian``).
+    ``prepare_jacobian``, ``holding``).
 
     SNES starts from the problem's guess, which extrapolates the last steps' motion; where that
     does not converge within :data:`FIRST_TRY` iterations it
@@ -172,6 +172,9 @@ class StickingGuess:
         part: the :class:`~vpcontact.model.normal_compliance.CompliancePart`.
         stick_first: the constant of its friction Jacobian.
     """
+
+    #: (the step solver's crawl stop never waits for this term: it holds no node back)
+    holding = False
 
     def __init__(self, part, stick_first):
         self.part = part
