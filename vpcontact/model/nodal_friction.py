@@ -166,6 +166,11 @@ class NodalFriction(NodalTerm):
             return self.friction.coefficient * lam
         return self.friction.bound_at(lam, self.part.nodes.points) * self.areas
 
+    def _new_solve(self) -> None:
+        """A new guess or predictor stage: no unloading node held yet (see :meth:`_unloading`)."""
+        self._excess = None
+        self.holding = False
+
     def _unloading(self, st: dict, moving: np.ndarray) -> np.ndarray:
         """The nodes beyond their cone that move along their trial force (Δũ_τ · t_trial > 0:
         the cone shrank under the old force, see the module docstring), touching since the
@@ -173,7 +178,7 @@ class NodalFriction(NodalTerm):
         this solve, now nearer their cone: linearised on the stick branch; a held node that is
         not nearer is released to the slip branch for the rest of the solve. Remembers the
         held nodes' excess |t_trial| − b (−∞: released) for the next Jacobian."""
-        excess = np.linalg.norm(st["trial"], axis=1) - st["bound"]
+        excess = st["size"] - st["bound"]
         along = (st["beyond"] & self.touching & ~moving
                  & (np.einsum("nt,nt->n", st["slip"], st["trial"]) > 0))
         released = np.zeros_like(along)
@@ -196,7 +201,8 @@ class NodalFriction(NodalTerm):
         bound = self._bound(lam)
         force = return_mapping(trial, bound)
         size = np.linalg.norm(trial, axis=1)
-        return {"lam": lam, "trial": trial, "bound": bound, "force": force, "slip": slip,
+        return {"lam": lam, "trial": trial, "size": size, "bound": bound, "force": force,
+                "slip": slip,
                 "beyond": size > bound,  # the return mapping's branch
                 # (nodes in contact: λ above the round-off of an inactive node's residual)
                 "slips": (size > bound * (1 + 1e-12))
@@ -317,8 +323,7 @@ class NodalFriction(NodalTerm):
         starts again sticking (:meth:`fallback`). Where another term asks for a longer first
         try (friction on a compliant part in the same scene), this part sticks from the start."""
         self._predicted[:] = np.nan
-        self._excess = None
-        self.holding = False
+        self._new_solve()
         if first_try > 0:
             self.fallback(x)
 
@@ -342,8 +347,7 @@ class NodalFriction(NodalTerm):
         stuck = self.x_old + self._shift() / self.scale
         values[self.tangential] = np.where(held, stuck, values[self.tangential])
         self._predicted = values[self.tangential].copy()
-        self._excess = None
-        self.holding = False
+        self._new_solve()
 
     @property
     def second_try(self) -> Optional[int]:
@@ -361,14 +365,12 @@ class NodalFriction(NodalTerm):
         (README: the dragged block on 256×64 cells, 35 iterations → 22)."""
         self._frozen = (np.full(len(self._lam), np.inf) if stick
                         else self.friction.coefficient * self._lam)
-        self._excess = None
-        self.holding = False
+        self._new_solve()
 
     def thaw(self) -> None:
         """Coulomb's own thresholds again (see :meth:`freeze`)."""
         self._frozen = None
-        self._excess = None
-        self.holding = False
+        self._new_solve()
 
     def commit(self, x: np.ndarray) -> None:
         """The step is accepted at x (SNES units; λ of the last residual, evaluated there)."""

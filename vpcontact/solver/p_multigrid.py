@@ -157,6 +157,17 @@ _STAR_CHOICES = {"auto": None, "true": True, "yes": True, "1": True,
                  "false": False, "no": False, "0": False}
 
 
+def _stars_choice(key: str, value, error=ValueError) -> Optional[bool]:
+    """The ``pmg_smooth_stars`` option ``key = value``: True, False or None (``auto``).
+
+    Raises:
+        error: naming the option and the valid values.
+    """
+    if str(value).lower() not in _STAR_CHOICES:
+        raise error(f"{key} must be auto, true or false, got {value!r}")
+    return _STAR_CHOICES[str(value).lower()]
+
+
 def check_options(options: dict) -> None:
     """Refuse a ``pmg_smooth_stars`` option (under any prefix) that is neither ``auto`` nor a
     PETSc truth value: it is read only when the field split first sets up, inside a solve.
@@ -165,8 +176,8 @@ def check_options(options: dict) -> None:
         ValueError: naming the option and the valid values.
     """
     for key, value in options.items():
-        if key.endswith("pmg_smooth_stars") and str(value).lower() not in _STAR_CHOICES:
-            raise ValueError(f"{key} must be auto, true or false, got {value!r}")
+        if key.endswith("pmg_smooth_stars"):
+            _stars_choice(key, value)
 
 
 def _set_up(ksp: PETSc.KSP, defaults: dict) -> None:
@@ -236,10 +247,8 @@ class PMultigrid:
         chooses by the block's size, :data:`STARS_FROM`; read now: the options are in PETSc's
         database while the field split sets up)."""
         key = (pc.getOptionsPrefix() or "") + "pmg_smooth_stars"
-        value = PETSc.Options().getString(key, "auto")
-        if value.lower() not in _STAR_CHOICES:  # (given on the command line: not checked before)
-            raise SolverOptionError(f"{key} must be auto, true or false, got {value!r}")
-        stars = _STAR_CHOICES[value.lower()]
+        # (given on the command line: not checked before)
+        stars = _stars_choice(key, PETSc.Options().getString(key, "auto"), SolverOptionError)
         if stars is None:
             stars = B.getSize()[0] >= STARS_FROM
         if not stars:

@@ -65,6 +65,7 @@ public:
       factor_start_.push_back(factor_size);
       const std::size_t n = static_cast<std::size_t>(offsets_[p + 1] - offsets_[p]);
       factor_size += n * n;
+      max_patch_ = std::max(max_patch_, n);
     }
     factor_start_.push_back(factor_size);
     factors_.assign(factor_size, 0.0);
@@ -131,7 +132,7 @@ public:
   {
     check_factorized();
     std::fill(y, y + num_rows_, 0.0);
-    std::vector<double> work(max_patch());
+    std::vector<double> work(max_patch_);
     for (std::size_t p = 0; p < size(); ++p)
     {
       const std::int64_t* rows = indices_.data() + offsets_[p];
@@ -152,16 +153,9 @@ private:
   std::vector<std::int64_t> pivots_;
   std::vector<std::int64_t> position_;
   std::vector<bool> diagonal_only_;
+  std::size_t max_patch_ = 0; // rows of the largest patch
   std::size_t singular_ = 0;
   bool factorized_ = false;
-
-  std::size_t max_patch() const
-  {
-    std::int64_t m = 0;
-    for (std::size_t p = 0; p < size(); ++p)
-      m = std::max(m, offsets_[p + 1] - offsets_[p]);
-    return static_cast<std::size_t>(m);
-  }
 
   void check_factorized() const
   {
