@@ -48,7 +48,7 @@ from benchlib import machine, save  # noqa: E402
 from vpcontact.paper import signorini as paper  # noqa: E402
 from vpcontact.solver import StepControl, advance  # noqa: E402
 from vpcontact.solver import linear as linear_solvers  # noqa: E402
-from vpcontact.solver import vi_linear  # noqa: E402
+from vpcontact.solver import star_schur, vi_linear  # noqa: E402
 
 #: the exact counterparts: (A by MUMPS, Schur complement formed, other options) per variant
 VARIANTS = {"as_used": (False, False, {}), "cell_weights": (False, False, {}),
@@ -63,14 +63,23 @@ VARIANTS = {"as_used": (False, False, {}), "cell_weights": (False, False, {}),
             # the P2 level's smoothing chosen (as_used: by the block's size)
             "stars": (False, False, {"fieldsplit_u_pmg_smooth_stars": "true"}),
             "chebyshev": (False, False, {"fieldsplit_u_pmg_smooth_stars": "false"}),
-            "stars_formed_schur": (False, True, {"fieldsplit_u_pmg_smooth_stars": "true"})}
+            "stars_formed_schur": (False, True, {"fieldsplit_u_pmg_smooth_stars": "true"}),
+            # the Schur block: the weighted mass S_p with the stars (as used before the stars'
+            # Schur complement), or the stars' Schur complement factorized
+            "mass": (False, False, {"fieldsplit_u_pmg_smooth_stars": "true"}),
+            "star_schur_lu": (False, False, {"fieldsplit_u_pmg_smooth_stars": "true",
+                                             "fieldsplit_p_pc_type": "lu"})}
 
 
 def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
            name: str) -> PETSc.KSP:
     """The field split of vpcontact's lagged VI solver on ``matrix``, with the swaps."""
     prefix = solver.prefix + f"parts_{name}_"
+    star = not formed and (name.startswith("star_schur")
+                           or (name == "as_used" and block.star_schur is not None))
     options = linear_solvers.lagged_options(True)
+    if star:
+        options = linear_solvers.star_schur_options(options)
     options.update(extra)
     if exact_a:
         options.update({"fieldsplit_u_pc_type": "lu",
@@ -85,19 +94,27 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
         ksp.setFromOptions()
         pc = ksp.getPC()
         pc.setFieldSplitIS(("u", block.is_u), ("p", block.is_p))
+        block.coarse_space.schur = None
         if formed:
             pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.FULL)
+        elif star:
+            schur = block.star_schur or star_schur.StarSchur(block.is_u, block.is_p)
+            schur.parents[prefix] = pc
+            block.coarse_space.schur = schur
+            pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, schur.matrix)
         else:
-            pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, _schur_matrix(block, name))
+            pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, _mass(block, name))
         ksp.setUp()
         for sub in pc.getFieldSplitSubKSP():  # (with the options: as the lagged solver does)
             sub.setUp()
+    block.coarse_space.schur = block.star_schur  # (the production solver's again)
     return ksp
 
 
-def _schur_matrix(block, name: str) -> PETSc.Mat:
-    """S_p as used, or (``cell_weights``) weighted by each point's own compliance."""
+def _mass(block, name: str) -> PETSc.Mat:
+    """S_p as used (capped), or (``cell_weights``) weighted by each point's own compliance."""
     if name != "cell_weights":
+        block.assemble_mass()
         return block.matrix
     fields = block.fields
     q, dp = ufl.TestFunction(fields.Q), ufl.TrialFunction(fields.Q)

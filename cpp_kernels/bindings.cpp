@@ -272,6 +272,23 @@ PYBIND11_MODULE(_cpp, m)
           py::arg("row_start"), py::arg("columns"), py::arg("values"),
           py::arg("first_column") = 0)
       .def(
+          "schur_sum",
+          [](const PatchSmoother& self, const IndexArray& row_start, const IndexArray& columns,
+             const InArray& values)
+          {
+            const LocalCsr Bt = local_csr(row_start, columns, values, 0);
+            std::vector<std::int64_t> rows, cols;
+            std::vector<double> entries;
+            {
+              py::gil_scoped_release release;
+              self.schur_sum(Bt, rows, cols, entries);
+            }
+            return py::make_tuple(py::array_t<std::int64_t>(rows.size(), rows.data()),
+                                  py::array_t<std::int64_t>(cols.size(), cols.data()),
+                                  py::array_t<double>(entries.size(), entries.data()));
+          },
+          py::arg("row_start"), py::arg("columns"), py::arg("values"))
+      .def(
           "apply",
           [](const PatchSmoother& self, const InArray& r, OutArray& y, double omega)
           {

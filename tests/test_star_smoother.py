@@ -222,3 +222,71 @@ def test_the_stars_smooth_large_blocks_by_default(above, stars, monkeypatch):
     assert (cycle.star_sweep is not None) == stars
     if stars:
         assert cycle.star_sweep.singular == 0
+
+
+@pytest.mark.serial
+def test_the_patches_schur_complements_equal_dense_ones():
+    """schur_sum gives Σ_p B_p A_pp⁻¹ B_pᵀ (B_pᵀ the rows of Bᵀ on patch p) as coordinates, with
+    the columns Bᵀ names (global: here offset by 100)."""
+    A = _matrix()
+    offsets, indices = _patches()
+    smoother = _cpp.PatchSmoother(offsets, indices, 30)
+    smoother.factorize(*_csr(A))
+    Bt = np.random.default_rng(2).standard_normal((30, 7))
+    Bt[np.abs(Bt) < 0.8] = 0.0
+    starts, columns, values = _csr(Bt)
+    rows, cols, entries = smoother.schur_sum(starts, columns + 100, values)
+    result = np.zeros((7, 7))
+    np.add.at(result, (rows - 100, cols - 100), entries)
+    expected = np.zeros((7, 7))
+    for p in range(3):
+        I = indices[offsets[p]:offsets[p + 1]]
+        expected += Bt[I].T @ np.linalg.solve(A[np.ix_(I, I)], Bt[I])
+    assert np.allclose(result, expected, rtol=0, atol=1e-12)
+    with pytest.raises(ValueError, match="Bt: 29 rows, the patches have 30"):
+        smoother.schur_sum(*_csr(Bt[:29]))
+
+
+def _stars_run(stars: str):
+    from vpcontact.paper import signorini as paper
+    from vpcontact.solver import StepControl, advance
+
+    options = {"lagged_fieldsplit_u_pmg_smooth_stars": stars,
+               "fieldsplit_u_pmg_smooth_stars": stars}
+    problem = paper.signorini_3d(6, 2, 2, petsc_options=options, sigma_y=paper.SIGMA_Y,
+                                 mu_star=paper.MU_STAR, formulation="mixed", degree=2,
+                                 linear="iterative", scheme="linearized")
+    steps = list(advance(problem, 0.08, StepControl(0.02)))
+    return problem, steps
+
+
+def test_with_the_stars_the_schur_block_is_theirs_and_the_answers_stay():
+    """With the vertex stars the field split's Schur block is the stars' Schur complement
+    C − ½ Σ_s B_s A_s⁻¹ B_sᵀ of SNES VI's full-size matrix (checked against scipy serially);
+    the flowing beam's steps converge to the answers of the weighted mass's run (serially and on
+    2 ranks)."""
+    problem, steps = _stars_run("true")
+    block = problem.solver._block
+    assert block.star_schur is not None
+    pc = problem.solver.lagged_lu.inner.getPC()
+    assert pc.getFieldSplitSubKSP()[1].getOperators()[1].handle == block.star_schur.matrix.handle
+    if COMM.size == 1:
+        import scipy.sparse as sparse
+
+        M = problem.solver.lagged_lu.matrix
+        full = sparse.csr_matrix(M.getValuesCSR()[::-1], shape=M.getSize())
+        iu, ip = block.is_u.getIndices(), block.is_p.getIndices()
+        A, B = full[iu][:, iu].toarray(), full[ip][:, iu].toarray()
+        expected = full[ip][:, ip].toarray()
+        offsets, indices = block.coarse_space.stars
+        for s in range(len(offsets) - 1):
+            I = indices[offsets[s]:offsets[s + 1]]
+            expected -= 0.5 * B[:, I] @ np.linalg.solve(A[np.ix_(I, I)], B[:, I].T)
+        S = block.star_schur.matrix
+        result = sparse.csr_matrix(S.getValuesCSR()[::-1], shape=S.getSize()).toarray()
+        assert np.abs(result - expected).max() < 1e-10 * np.abs(expected).max()
+    reference, reference_steps = _stars_run("false")
+    assert reference.solver._block.star_schur is None
+    u, u_ref = problem.u.x.array, reference.u.x.array
+    assert np.abs(u - u_ref).max() < 1e-6 * np.abs(u_ref).max()
+    assert [s.time for s in steps] == [s.time for s in reference_steps]

@@ -29,7 +29,7 @@ from typing import Optional
 
 from petsc4py import PETSc
 
-from vpcontact.solver import p_multigrid
+from vpcontact.solver import p_multigrid, star_schur
 from vpcontact.linear_solvers import ITERATIVE_FROM, LINEAR_SOLVERS, choose  # noqa: F401
 
 #: Relative tolerance of the block-preconditioned Krylov solves of the mixed formulation: an
@@ -93,6 +93,29 @@ def iterative_options(mixed: bool) -> dict:
     return dict(MIXED_OPTIONS if mixed else DISPLACEMENT_OPTIONS)
 
 
+#: The Schur block's options where its matrix is the stars' Schur complement
+#: (:mod:`~vpcontact.solver.star_schur`; with the vertex-star smoothing): six Chebyshev–Jacobi
+#: sweeps with the spectrum bound estimated for every new matrix — its Jacobi spectrum is not
+#: bounded a priori as the mass matrix's is ([0.52, 2.15] at 44 508 unknowns, [0.20, 3.06] at
+#: 143 128 on the paper's 3-D test; with the mass matrix's fixed bounds GMRES took 25 iterations
+#: there, with three sweeps 19, with six 16, factorized 16).
+STAR_SCHUR_OPTIONS = {
+    "fieldsplit_p_ksp_ksp_max_it": 6,
+    "fieldsplit_p_ksp_ksp_chebyshev_esteig": "0,0.05,0,1.1",
+}
+
+
+def star_schur_options(options: dict) -> dict:
+    """``options`` (as :data:`MIXED_OPTIONS`, or prefixed like :func:`lagged_options`) with the
+    Schur block set up for the stars' Schur complement."""
+    result = dict(options)
+    for prefix in {key[:-len("fieldsplit_p_ksp_ksp_type")] for key in options
+                   if key.endswith("fieldsplit_p_ksp_ksp_type")}:
+        result.pop(prefix + "fieldsplit_p_ksp_ksp_chebyshev_eigenvalues", None)
+        result.update({prefix + key: value for key, value in STAR_SCHUR_OPTIONS.items()})
+    return result
+
+
 def lagged_options(mixed: bool) -> dict:
     """Options of the VI's inner preconditioner on M (``lagged_`` + these): the same PC."""
     options = iterative_options(mixed)
@@ -101,18 +124,23 @@ def lagged_options(mixed: bool) -> dict:
 
 class BlockPreconditioner:
     """Sets up PCFIELDSPLIT for a layout with a pressure field: the field index sets, the
-    rigid-body modes on the displacement block, and the weighted pressure mass matrix as the
-    Schur complement's preconditioner, reassembled with every Jacobian.
+    rigid-body modes on the displacement block, and the Schur complement's preconditioner —
+    the weighted pressure mass matrix, reassembled with every Jacobian, or, where the
+    displacement block is smoothed over the vertex stars, the stars' Schur complement,
+    reassembled with the cycle (:mod:`~vpcontact.solver.star_schur`).
 
     Args:
         fields: the :class:`~vpcontact.model.fields.DisplacementPressure` layout.
         near_nullspace: the rigid-body modes in the layout of the SNES vector (rotated if the
             unknowns are); their u parts go to the displacement block.
         scale: SNES's displacement scale (the Schur matrix is in SNES's units).
+        stars: the displacement block is smoothed over the vertex stars (then the Schur
+            complement is theirs; the caller gives the split :func:`star_schur_options` and
+            :attr:`star_schur` its source matrix).
     """
 
     def __init__(self, fields, near_nullspace: Optional[PETSc.NullSpace], scale: float,
-                 prefix: str = "", rotation: Optional[PETSc.Mat] = None):
+                 prefix: str = "", rotation: Optional[PETSc.Mat] = None, stars: bool = False):
         from dolfinx.fem import petsc as fem_petsc
 
         self.fields = fields
@@ -133,27 +161,48 @@ class BlockPreconditioner:
         self.solver = None
         self.scale = scale
         self._form = fields.schur_preconditioner_form(scale)
-        self.matrix = fem_petsc.create_matrix(self._form)
+        self.matrix = fem_petsc.create_matrix(self._form)  # S_p
         self._assemble_matrix = fem_petsc.assemble_matrix
+        #: the stars' Schur complement, or None (S_p)
+        self.star_schur = star_schur.StarSchur(self.is_u, self.is_p) if stars else None
+        self.coarse_space.schur = self.star_schur
 
-    def update(self) -> None:
-        """Reassemble the Schur preconditioner from the current tangent (and have the lagged
-        VI solver rebuild the field split at its next solve)."""
+    @property
+    def schur_matrix(self) -> PETSc.Mat:
+        """The Schur complement's preconditioning matrix the field split is given."""
+        return self.matrix if self.star_schur is None else self.star_schur.matrix
+
+    def assemble_mass(self) -> None:
+        """Assemble S_p from the current tangent."""
         self.fields.update_schur_weight()
         self.matrix.zeroEntries()
         self._assemble_matrix(self.matrix, self._form)
         self.matrix.assemble()
+
+    def update(self) -> None:
+        """Reassemble the Schur preconditioner from the current tangent (S_p; the stars' is
+        reassembled with the cycle) and have the lagged VI solver rebuild the field split at
+        its next solve."""
+        if self.star_schur is None:
+            self.assemble_mass()
         if self.solver is not None and REBUILD_WITH_EVERY_JACOBIAN:
             self.solver.expire()
 
     def configure(self, pc: PETSc.PC) -> None:
         """Give ``pc`` (type fieldsplit, from the options) its fields and Schur matrix."""
-        if pc.getType() != "fieldsplit" or pc.handle in self._configured:
+        if pc.getType() != "fieldsplit":
+            return
+        if self.star_schur is not None:
+            self.star_schur.parents[pc.getOptionsPrefix() or ""] = pc
+        if pc.handle in self._configured:
             return  # (the splits of a PC are given once; later set-ups keep them)
         self._configured.add(pc.handle)
         pc.setFieldSplitIS(("u", self.is_u), ("p", self.is_p))
-        pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, self.matrix)
+        pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, self.schur_matrix)
 
     def destroy(self) -> None:
         self.matrix.destroy()
+        if self.star_schur is not None:
+            self.star_schur.parents.clear()
+            self.star_schur.destroy()
         self.coarse_space.destroy()

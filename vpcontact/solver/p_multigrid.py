@@ -116,6 +116,9 @@ class CoarseSpace:
         self.block_size = self.V1.dofmap.index_map_bs
         self.modes = rigid_body_modes(self.V1)  # Cartesian: P carries the frames
         self._V = V
+        #: the Schur complement assembled from the stars' factors
+        #: (:class:`~vpcontact.solver.star_schur.StarSchur`), where the field split uses it
+        self.schur = None
 
     @functools.cached_property
     def stars(self) -> tuple[np.ndarray, np.ndarray]:
@@ -166,6 +169,13 @@ def _stars_choice(key: str, value, error=ValueError) -> Optional[bool]:
     if str(value).lower() not in _STAR_CHOICES:
         raise error(f"{key} must be auto, true or false, got {value!r}")
     return _STAR_CHOICES[str(value).lower()]
+
+
+def uses_stars(key: str, value, rows: int, error=ValueError) -> bool:
+    """Whether a displacement block of ``rows`` rows is smoothed over the vertex stars, with
+    ``value`` given for the option ``key`` (``auto``: from :data:`STARS_FROM` rows on)."""
+    stars = _stars_choice(key, value, error)
+    return rows >= STARS_FROM if stars is None else stars
 
 
 def check_options(options: dict) -> None:
@@ -233,6 +243,11 @@ class PMultigrid:
             self.coarse_matrix.destroy()
         self.coarse_matrix = coarse
         self._set_up_smoother(pc, A, B)
+        if self.space.schur is not None:
+            if self.star_sweep is None:
+                raise SolverOptionError("the star Schur complement needs the vertex-star "
+                                        "smoothing (pmg_smooth_stars)")
+            self.space.schur.update(self.star_sweep, pc.getOptionsPrefix() or "")
         self.coarse.setOperators(coarse)
         _set_up(self.coarse, COARSE_OPTIONS)
         for vec in (self._r, self._rc, self._ec, self._dy):
@@ -248,10 +263,8 @@ class PMultigrid:
         database while the field split sets up)."""
         key = (pc.getOptionsPrefix() or "") + "pmg_smooth_stars"
         # (given on the command line: not checked before)
-        stars = _stars_choice(key, PETSc.Options().getString(key, "auto"), SolverOptionError)
-        if stars is None:
-            stars = B.getSize()[0] >= STARS_FROM
-        if not stars:
+        if not uses_stars(key, PETSc.Options().getString(key, "auto"), B.getSize()[0],
+                          SolverOptionError):
             self.star_sweep = None
             self.smoother.setOperators(A, B)
             _set_up(self.smoother, SMOOTHER_OPTIONS)

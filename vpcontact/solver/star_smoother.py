@@ -98,6 +98,12 @@ class StarSmoother:
         row_start, columns, values = A.getValuesCSR()
         self._patches.factorize(row_start, columns, values, A.getOwnershipRange()[0])
 
+    def schur_sum(self, row_start, columns, values) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Σ_s B_s A_s⁻¹ B_sᵀ over the stars as coordinates (rows, columns, values), from the
+        local rows of Bᵀ (CSR, global columns) and the factors of the last
+        :meth:`set_operator`."""
+        return self._patches.schur_sum(row_start, columns, values)
+
     def solve(self, b: PETSc.Vec, y: PETSc.Vec) -> None:
         """y ← one sweep on A y = b from y = 0."""
         self._patches.apply(b.array_r, y.array, DAMPING)

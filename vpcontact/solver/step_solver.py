@@ -62,6 +62,18 @@ def _longest_first_try(terms) -> int:
     return max([n for n in tries if n is not None] or [0])
 
 
+def _uses_stars(options: dict, rows: int) -> bool:
+    """Whether both of the mixed formulation's field splits (Newton's and SNES VI's lagged one)
+    smooth a displacement block of ``rows`` rows over the vertex stars (an invalid option value
+    counts as no: it is refused when the options are read)."""
+    try:
+        return all(p_multigrid.uses_stars(key, options.get(key, "auto"), rows)
+                   for key in ("fieldsplit_u_pmg_smooth_stars",
+                               "lagged_fieldsplit_u_pmg_smooth_stars"))
+    except ValueError:
+        return False
+
+
 class StepSolver:
     """Newton (SNES) solver for F(u; v) = 0 with a refresh hook run before each assembly.
 
@@ -180,8 +192,13 @@ class StepSolver:
             self._modes = rigid_body_modes(u.function_space, variables, layout=fields)
             if mixed:
                 rotation = None if variables is None else variables.matrix
+                stars = _uses_stars(petsc_options or {},
+                                    fields.field_indices()["displacement"].getSize())
+                if stars:  # the Schur complement from the stars' factors
+                    defaults = linear_solvers.star_schur_options(defaults)
                 self._block = linear_solvers.BlockPreconditioner(
-                    fields, self._modes, self.scale, prefix=self.prefix, rotation=rotation)
+                    fields, self._modes, self.scale, prefix=self.prefix, rotation=rotation,
+                    stars=stars)
             else:
                 self._A.setNearNullSpace(self._modes)
         self._options = {**defaults, **(petsc_options or {})}

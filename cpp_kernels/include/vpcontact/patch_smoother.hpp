@@ -145,6 +145,62 @@ public:
     }
   }
 
+  /// The patches' Schur complements summed: S = sum_p B_p A_pp^{-1} B_p^T, with B_p^T the rows
+  /// of `Bt` on patch p (every column kept: Bt couples these rows to another field, e.g. the
+  /// pressure, whose global indices its columns are). Returned as coordinates: each patch adds
+  /// the m x m entries of the columns its rows touch (stored zeros included, so the pattern
+  /// depends only on Bt's pattern), in patch order.
+  /// @param Bt the local rows of the coupling block; Bt.num_rows must be this smoother's.
+  /// @throws std::invalid_argument naming `Bt` if its row count differs.
+  void schur_sum(const LocalCsr& Bt, std::vector<std::int64_t>& rows,
+                 std::vector<std::int64_t>& cols, std::vector<double>& values) const
+  {
+    check_factorized();
+    if (Bt.num_rows != num_rows_)
+      throw std::invalid_argument("Bt: " + std::to_string(Bt.num_rows)
+                                  + " rows, the patches have " + std::to_string(num_rows_));
+    rows.clear();
+    cols.clear();
+    values.clear();
+    std::vector<std::int64_t> touched;
+    std::vector<double> dense, solved;
+    for (std::size_t p = 0; p < size(); ++p)
+    {
+      const std::int64_t* patch = indices_.data() + offsets_[p];
+      const std::size_t n = static_cast<std::size_t>(offsets_[p + 1] - offsets_[p]);
+      touched.clear();
+      for (std::size_t a = 0; a < n; ++a)
+        touched.insert(touched.end(), Bt.columns + Bt.row_start[patch[a]],
+                       Bt.columns + Bt.row_start[patch[a] + 1]);
+      std::sort(touched.begin(), touched.end());
+      touched.erase(std::unique(touched.begin(), touched.end()), touched.end());
+      const std::size_t m = touched.size();
+      if (m == 0)
+        continue;
+      dense.assign(m * n, 0.0); // column c of B_p^T, contiguous: dense[c * n + a]
+      for (std::size_t a = 0; a < n; ++a)
+        for (std::int64_t k = Bt.row_start[patch[a]]; k < Bt.row_start[patch[a] + 1]; ++k)
+        {
+          const auto c = static_cast<std::size_t>(
+              std::lower_bound(touched.begin(), touched.end(), Bt.columns[k]) - touched.begin());
+          dense[c * n + a] += Bt.values[k];
+        }
+      solved = dense;
+      for (std::size_t c = 0; c < m; ++c)
+        solve(p, solved.data() + c * n);
+      for (std::size_t c = 0; c < m; ++c)
+        for (std::size_t d = 0; d < m; ++d)
+        {
+          double sum = 0.0;
+          for (std::size_t a = 0; a < n; ++a)
+            sum += dense[c * n + a] * solved[d * n + a];
+          rows.push_back(touched[c]);
+          cols.push_back(touched[d]);
+          values.push_back(sum);
+        }
+    }
+  }
+
 private:
   std::vector<std::int64_t> offsets_, indices_;
   std::size_t num_rows_;
