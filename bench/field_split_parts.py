@@ -7,9 +7,11 @@ with k = 0.02, then one step of k = 0.01 begins. The second reduced system SNES 
 step is captured and solved again by GMRES (rtol 1e-4 and 1e-8, as the VI's lagged solver does)
 with each part of the field split swapped for its exact counterpart:
 
-* ``as_used``: one p-multigrid cycle on the displacement block A, three Chebyshev–Jacobi sweeps
-  on the weighted pressure mass S_p (vpcontact's solver: each point's shear compliance, capped
-  at 10 times that of its pressure nodes' patch mean stiffness);
+* ``as_used``: vpcontact's solver: one p-multigrid cycle on the displacement block A and, below
+  40 000 displacement unknowns, three Chebyshev–Jacobi sweeps on the weighted pressure mass S_p
+  (each point's shear compliance, capped at 10 times that of its pressure nodes' patch mean
+  stiffness), from 40 000 on (with the vertex stars) six on the stars' Schur complement Ŝ;
+* ``mass``: the stars' cycle with S_p (as used before Ŝ); ``star_schur_lu``: with Ŝ factorized;
 * ``cell_weights``: as used, but S_p weighted by each point's own compliance 1/(2G_eff) + 1/K,
   uncapped (vpcontact's solver before the cap);
 * ``exact_A``: A factorized (MUMPS), S_p;

@@ -12,7 +12,8 @@ cycle on the displacement block (Chebyshev–Jacobi or vertex stars on P2, a P1 
 problem under GAMG: :mod:`vpcontact.solver.p_multigrid`) and, for the Schur complement, the
 pressure mass matrix weighted by the current tangent's shear compliance (capped where a thin
 zone flows) + 1/K (:meth:`~vpcontact.model.fields.DisplacementPressure.
-schur_preconditioner_form`). The displacement block no longer carries the bulk modulus, so
+schur_preconditioner_form`) or, where the vertex stars smooth, their own Schur complement
+(:mod:`vpcontact.solver.star_schur`). The displacement block no longer carries the bulk modulus, so
 multigrid works on it even where the body flows (where P1 or P2 displacements alone make every
 algebraic multigrid fail: the tangent is nearly incompressible). Inside SNES VI the same
 preconditioner acts on the full-size matrix M of :class:`~vpcontact.solver.vi_linear.
