@@ -270,14 +270,20 @@ def test_options_reach_the_p_multigrid_levels_inside_the_vi():
     assert cycle.coarse.getPC().getType() == "jacobi"
 
 
-def test_block_preconditioner_without_the_vi_matches_the_direct_solver():
+@pytest.mark.parametrize("stars", ["auto", "true"])
+def test_block_preconditioner_without_the_vi_matches_the_direct_solver(stars):
     """Without SNES VI (normal compliance) the step's KSP is PETSc's own: its field split must
     still get the block solvers of vpcontact.solver.linear (they read their options when SNES
     first sets them up, inside the solve) — the p-multigrid on u and Chebyshev on the weighted
-    mass matrix — and give the direct solver's answer."""
+    mass matrix or, with the vertex stars, on the stars' Schur complement, assembled from the
+    Jacobian SNES gives it — and give the direct solver's answer."""
     _, direct, f_direct = _bundled_3d("normal_compliance_3d", "direct", 0.05)
-    _, iterative, f_iterative = _bundled_3d("normal_compliance_3d", "iterative", 0.05)
+    _, iterative, f_iterative = _bundled_3d(
+        "normal_compliance_3d", "iterative", 0.05,
+        options={"fieldsplit_u_pmg_smooth_stars": stars,
+                 "lagged_fieldsplit_u_pmg_smooth_stars": stars})
     assert iterative.solver.linear == "iterative"
+    assert (iterative.solver._block.star_schur is not None) == (stars == "true")
     pc = iterative.solver.snes.getKSP().getPC()
     assert pc.getType() == "fieldsplit"
     assert [k.getPC().getType() for k in pc.getFieldSplitSubKSP()] == ["python", "ksp"]

@@ -136,8 +136,8 @@ class BlockPreconditioner:
             unknowns are); their u parts go to the displacement block.
         scale: SNES's displacement scale (the Schur matrix is in SNES's units).
         stars: the displacement block is smoothed over the vertex stars (then the Schur
-            complement is theirs; the caller gives the split :func:`star_schur_options` and
-            :attr:`star_schur` its source matrix).
+            complement is theirs, and the caller gives the split :func:`star_schur_options`;
+            :meth:`configure` tells it which matrix each field split works on).
     """
 
     def __init__(self, fields, near_nullspace: Optional[PETSc.NullSpace], scale: float,
