@@ -100,7 +100,9 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
         if formed:
             pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.FULL)
         elif star:
-            schur = block.star_schur or star_schur.StarSchur(block.is_u, block.is_p)
+            schur = block.star_schur
+            if schur is None:
+                schur = _SCRATCH[prefix] = star_schur.StarSchur(block.is_u, block.is_p)
             schur.parents[prefix] = pc
             block.coarse_space.schur = schur
             pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, schur.matrix)
@@ -111,6 +113,20 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
             sub.setUp()
     block.coarse_space.schur = block.star_schur  # (the production solver's again)
     return ksp
+
+
+def _forget_split(block, prefix: str) -> None:
+    """Drop a variant's field split from the solver's stars' Schur complement, and destroy the
+    one built for the variant where the solver has none."""
+    if block.star_schur is not None:
+        block.star_schur.parents.pop(prefix, None)
+    scratch = _SCRATCH.pop(prefix, None)
+    if scratch is not None:
+        scratch.destroy()
+
+
+#: the stars' Schur complements built for variants where the solver has none, by prefix
+_SCRATCH: dict = {}
 
 
 def _mass(block, name: str) -> PETSc.Mat:
@@ -161,6 +177,7 @@ def measure(n: int, scheme: str, t0: float, sigma_y: float, variants) -> dict:
                 row[f"converged_rtol_{rtol:g}"] = bool(converged)
                 row[f"seconds_rtol_{rtol:g}"] = time.perf_counter() - start
             record[name] = row
+            _forget_split(block, solver.prefix + f"parts_{name}_")
             lagged.inner.destroy()
             y.destroy()
         lagged.inner = kept

@@ -50,7 +50,7 @@ class StarSchur:
         self.matrix.setType(PETSc.Mat.Type.AIJ)
         self._coupling = self._pressure = None  # M's (u, p) and (p, p) blocks, kept
         self._pattern: Optional[tuple[np.ndarray, np.ndarray]] = None
-        self._order = self._starts = self._rows = None
+        self._order = self._starts = self._rows = self._columns = None
 
     def update(self, sweep: star_smoother.StarSmoother, prefix: str) -> None:
         """Reassemble Ŝ from the stars' factors in ``sweep`` and the matrix of the field split
@@ -72,9 +72,8 @@ class StarSchur:
         if self._pattern is None or not (np.array_equal(rows, self._pattern[0])
                                          and np.array_equal(cols, self._pattern[1])):
             self._new_pattern(rows, cols)
-        order = self._order
         self.matrix.zeroEntries()
-        self.matrix.setValuesIJV(self._starts, cols[order], entries[order],
+        self.matrix.setValuesIJV(self._starts, self._columns, entries[self._order],
                                  addv=PETSc.InsertMode.ADD_VALUES, rowmap=self._rows)
         self.matrix.assemble()
 
@@ -83,6 +82,7 @@ class StarSchur:
         (an upper bound: each process counts its own distinct entries per row)."""
         self._pattern = (rows, cols)
         self._order = np.argsort(rows, kind="stable")
+        self._columns = cols[self._order]  # grouped by row, as setValuesIJV takes them
         unique_rows, counts = np.unique(rows, return_counts=True)
         self._rows = unique_rows.astype(PETSc.IntType)
         self._starts = np.concatenate([[0], np.cumsum(counts)]).astype(PETSc.IntType)
