@@ -12,6 +12,8 @@ with each part of the field split swapped for its exact counterpart:
   (each point's shear compliance, capped at 10 times that of its pressure nodes' patch mean
   stiffness), from 40 000 on (with the vertex stars) six on the stars' Schur complement Ŝ;
 * ``mass``: the stars' cycle with S_p (as used before Ŝ); ``star_schur_lu``: with Ŝ factorized;
+  ``coarse_schur``: with Ŝ and the cycle's coarse term, the coarse level factorized
+  (``pmg_schur_coarse``, :mod:`vpcontact.solver.coarse_schur`);
 * ``cell_weights``: as used, but S_p weighted by each point's own compliance 1/(2G_eff) + 1/K,
   uncapped (vpcontact's solver before the cap);
 * ``exact_A``: A factorized (MUMPS), S_p;
@@ -70,17 +72,23 @@ VARIANTS = {"as_used": (False, False, {}), "cell_weights": (False, False, {}),
             # Schur complement), or the stars' Schur complement factorized
             "mass": (False, False, {"fieldsplit_u_pmg_smooth_stars": "true"}),
             "star_schur_lu": (False, False, {"fieldsplit_u_pmg_smooth_stars": "true",
-                                             "fieldsplit_p_pc_type": "lu"})}
+                                             "fieldsplit_p_pc_type": "lu"}),
+            # the stars' Schur complement with the cycle's coarse term, the coarse level and
+            # the mixed coarse matrix factorized (vpcontact.solver.coarse_schur)
+            "coarse_schur": (False, False, {"fieldsplit_u_pmg_smooth_stars": "true"})}
 
 
 def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
            name: str) -> PETSc.KSP:
     """The field split of vpcontact's lagged VI solver on ``matrix``, with the swaps."""
     prefix = solver.prefix + f"parts_{name}_"
-    star = not formed and (name.startswith("star_schur")
+    coarse = name == "coarse_schur"
+    star = not formed and (name.startswith("star_schur") or coarse
                            or (name == "as_used" and block.star_schur is not None))
     options = linear_solvers.lagged_options(True)
-    if star:
+    if coarse:
+        options = linear_solvers.coarse_schur_options(options)
+    elif star:
         options = linear_solvers.star_schur_options(options)
     options.update(extra)
     if exact_a:
@@ -101,8 +109,9 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
             pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.FULL)
         elif star:
             schur = block.star_schur
-            if schur is None:
-                schur = _SCRATCH[prefix] = star_schur.StarSchur(block.is_u, block.is_p)
+            if schur is None or coarse != (schur.coarse is not None):
+                schur = _SCRATCH[prefix] = star_schur.StarSchur(block.is_u, block.is_p,
+                                                                 coarse=coarse)
             schur.parents[prefix] = pc
             block.coarse_space.schur = schur
             pc.setFieldSplitSchurPreType(PETSc.PC.SchurPreType.USER, schur.matrix)
@@ -117,7 +126,7 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
 
 def _forget_split(block, prefix: str) -> None:
     """Drop a variant's field split from the solver's stars' Schur complement, and destroy the
-    one built for the variant where the solver has none."""
+    one built for the variant where the solver has none (or one of the other kind)."""
     if block.star_schur is not None:
         block.star_schur.parents.pop(prefix, None)
     scratch = _SCRATCH.pop(prefix, None)

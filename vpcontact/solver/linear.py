@@ -117,6 +117,23 @@ def star_schur_options(options: dict) -> dict:
     return result
 
 
+def coarse_schur_options(options: dict) -> dict:
+    """``options`` as :func:`star_schur_options` gives them, with the Schur block solved with
+    the cycle's coarse term (:mod:`~vpcontact.solver.coarse_schur`; the cycle then factorizes
+    its coarse level)."""
+    result = star_schur_options(options)
+    for prefix in {key[:-len("fieldsplit_p_ksp_ksp_type")] for key in options
+                   if key.endswith("fieldsplit_p_ksp_ksp_type")}:
+        for key in [key for key in result  # (the inner KSP of pc_type ksp)
+                    if key.startswith((prefix + "fieldsplit_p_ksp_ksp_",
+                                       prefix + "fieldsplit_p_ksp_pc_"))]:
+            del result[key]
+        result.update({prefix + "fieldsplit_p_pc_type": "python",
+                       prefix + "fieldsplit_p_pc_python_type":
+                       "vpcontact.solver.coarse_schur.CoarseSchurPC"})
+    return result
+
+
 def lagged_options(mixed: bool) -> dict:
     """Options of the VI's inner preconditioner on M (``lagged_`` + these): the same PC."""
     options = iterative_options(mixed)
@@ -138,10 +155,13 @@ class BlockPreconditioner:
         stars: the displacement block is smoothed over the vertex stars (then the Schur
             complement is theirs, and the caller gives the split :func:`star_schur_options`;
             :meth:`configure` tells it which matrix each field split works on).
+        coarse: with the stars, the Schur block also takes the cycle's coarse term, solved
+            exactly (the caller gives the split :func:`coarse_schur_options`).
     """
 
     def __init__(self, fields, near_nullspace: Optional[PETSc.NullSpace], scale: float,
-                 prefix: str = "", rotation: Optional[PETSc.Mat] = None, stars: bool = False):
+                 prefix: str = "", rotation: Optional[PETSc.Mat] = None, stars: bool = False,
+                 coarse: bool = False):
         from dolfinx.fem import petsc as fem_petsc
 
         self.fields = fields
@@ -165,7 +185,8 @@ class BlockPreconditioner:
         self.matrix = fem_petsc.create_matrix(self._form)  # S_p
         self._assemble_matrix = fem_petsc.assemble_matrix
         #: the stars' Schur complement, or None (S_p)
-        self.star_schur = star_schur.StarSchur(self.is_u, self.is_p) if stars else None
+        self.star_schur = (star_schur.StarSchur(self.is_u, self.is_p, coarse=coarse) if stars
+                           else None)
         self.coarse_space.schur = self.star_schur
 
     @property

@@ -51,7 +51,7 @@ from dolfinx.cpp.fem.petsc import interpolation_matrix
 from petsc4py import PETSc
 
 from vpcontact.errors import SolverOptionError
-from vpcontact.solver import star_smoother
+from vpcontact.solver import coarse_schur, star_smoother
 from vpcontact.solver.vi_linear import rigid_body_modes
 
 #: Displacement blocks from this many rows on are smoothed over the vertex stars (option
@@ -137,7 +137,8 @@ def register(prefix: str, space: CoarseSpace) -> None:
     _SPACES[prefix] = space
 
 
-def _lookup(prefix: str) -> CoarseSpace:
+def lookup(prefix: str) -> CoarseSpace:
+    """The coarse space registered under the longest key ``prefix`` starts with."""
     matches = [key for key in _SPACES.keys() if prefix.startswith(key)]
     if not matches:
         raise SolverOptionError(f"no P1 coarse space registered for the options prefix "
@@ -161,7 +162,8 @@ _STAR_CHOICES = {"auto": None, "true": True, "yes": True, "1": True,
 
 
 def _stars_choice(key: str, value, error=ValueError) -> Optional[bool]:
-    """The ``pmg_smooth_stars`` option ``key = value``: True, False or None (``auto``).
+    """The ``pmg_smooth_stars`` (or ``pmg_schur_coarse``) option ``key = value``: True, False or
+    None (``auto``).
 
     Raises:
         error: naming the option and the valid values.
@@ -178,15 +180,24 @@ def uses_stars(key: str, value, rows: int, error=ValueError) -> bool:
     return rows >= STARS_FROM if stars is None else stars
 
 
+def uses_coarse_schur(key: str, value, error=ValueError) -> bool:
+    """Whether the Schur block of a field split smoothed over the stars takes the cycle's coarse
+    term (:mod:`~vpcontact.solver.coarse_schur`), with ``value`` given for the option ``key``
+    (``pmg_schur_coarse``; ``auto``, the default, is no: the two factorizations cost more time
+    than the iterations they save on the paper's 3-D test up to 143 128 unknowns, README)."""
+    return bool(_stars_choice(key, value, error))
+
+
 def check_options(options: dict) -> None:
-    """Refuse a ``pmg_smooth_stars`` option (under any prefix) that is neither ``auto`` nor a
-    PETSc truth value: it is read only when the field split first sets up, inside a solve.
+    """Refuse a ``pmg_smooth_stars`` or ``pmg_schur_coarse`` option (under any prefix) that is
+    neither ``auto`` nor a PETSc truth value: it is read only when the field split first sets
+    up, inside a solve.
 
     Raises:
         ValueError: naming the option and the valid values.
     """
     for key, value in options.items():
-        if key.endswith("pmg_smooth_stars"):
+        if key.endswith(("pmg_smooth_stars", "pmg_schur_coarse")):
             _stars_choice(key, value)
 
 
@@ -219,7 +230,7 @@ class PMultigrid:
 
     def _create(self, pc: PETSc.PC) -> None:
         prefix = pc.getOptionsPrefix() or ""
-        self.space = _lookup(prefix)
+        self.space = lookup(prefix)
         comm = pc.getComm()
         self.smoother = PETSc.KSP().create(comm)
         self.smoother.setOptionsPrefix(prefix + "pmg_smooth_")
@@ -248,8 +259,14 @@ class PMultigrid:
                 raise SolverOptionError("the star Schur complement needs the vertex-star "
                                         "smoothing (pmg_smooth_stars)")
             self.space.schur.update(self.star_sweep, pc.getOptionsPrefix() or "")
-        self.coarse.setOperators(coarse)
-        _set_up(self.coarse, COARSE_OPTIONS)
+            if self.space.schur.coarse is not None:  # its coarse term, with this A_c
+                self.space.schur.coarse.update(self.space.schur.coupling, P, coarse,
+                                               self.space.schur.matrix)
+        if self.space.schur is not None and self.space.schur.coarse is not None:
+            coarse_schur.factorize(self.coarse, coarse)  # (the coarse term is exact with it)
+        else:
+            self.coarse.setOperators(coarse)
+            _set_up(self.coarse, COARSE_OPTIONS)
         for vec in (self._r, self._rc, self._ec, self._dy):
             if vec is not None:
                 vec.destroy()

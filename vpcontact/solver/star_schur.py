@@ -28,7 +28,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact.solver import star_smoother
+from vpcontact.solver import coarse_schur, star_smoother
 
 
 class StarSchur:
@@ -36,10 +36,14 @@ class StarSchur:
 
     Args:
         is_u, is_p: the fields' index sets in the matrix the field split works on.
+        coarse: give the pressure split Ŝ with the cycle's coarse term, solved exactly
+            (:mod:`~vpcontact.solver.coarse_schur`).
     """
 
-    def __init__(self, is_u: PETSc.IS, is_p: PETSc.IS):
+    def __init__(self, is_u: PETSc.IS, is_p: PETSc.IS, coarse: bool = False):
         self.is_u, self.is_p = is_u, is_p
+        #: the cycle's coarse term, solved exactly with Ŝ (:mod:`~vpcontact.solver.coarse_schur`)
+        self.coarse = coarse_schur.CoarseSchur(is_p.getComm()) if coarse else None
         #: the field-split PCs by options prefix (their operators are the matrices split:
         #: the SNES Jacobian, SNES VI's full-size matrix M), registered as they are configured
         self.parents: dict[str, PETSc.PC] = {}
@@ -77,6 +81,11 @@ class StarSchur:
                                  addv=PETSc.InsertMode.ADD_VALUES, rowmap=self._rows)
         self.matrix.assemble()
 
+    @property
+    def coupling(self) -> Optional[PETSc.Mat]:
+        """Bᵀ: the displacement rows' block on the pressure columns, as of the last update."""
+        return self._coupling
+
     def _new_pattern(self, rows: np.ndarray, cols: np.ndarray) -> None:
         """Group the entries by row and preallocate Ŝ for their union over the processes
         (an upper bound: each process counts its own distinct entries per row)."""
@@ -108,6 +117,6 @@ class StarSchur:
         self.matrix.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, True)
 
     def destroy(self) -> None:
-        for obj in (self.matrix, self._coupling, self._pressure):
+        for obj in (self.matrix, self._coupling, self._pressure, self.coarse):
             if obj is not None:
                 obj.destroy()

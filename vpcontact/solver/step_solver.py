@@ -22,7 +22,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.model.extent import mesh_extent
-from vpcontact.errors import ConvergenceError, InputError
+from vpcontact.errors import ConvergenceError, InputError, SolverOptionError
 from vpcontact.solver import linear as linear_solvers
 from vpcontact.solver import p_multigrid
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
@@ -70,6 +70,17 @@ def _uses_stars(options: dict, rows: int) -> bool:
         return all(p_multigrid.uses_stars(key, options.get(key, "auto"), rows)
                    for key in ("fieldsplit_u_pmg_smooth_stars",
                                "lagged_fieldsplit_u_pmg_smooth_stars"))
+    except ValueError:
+        return False
+
+
+def _uses_coarse_schur(options: dict) -> bool:
+    """Whether both field splits' Schur blocks take the cycle's coarse term (with the stars;
+    an invalid option value counts as no: it is refused when the options are read)."""
+    try:
+        return all(p_multigrid.uses_coarse_schur(key, options.get(key, "auto"))
+                   for key in ("fieldsplit_u_pmg_schur_coarse",
+                               "lagged_fieldsplit_u_pmg_schur_coarse"))
     except ValueError:
         return False
 
@@ -192,13 +203,23 @@ class StepSolver:
             self._modes = rigid_body_modes(u.function_space, variables, layout=fields)
             if mixed:
                 rotation = None if variables is None else variables.matrix
-                stars = _uses_stars(petsc_options or {},
-                                    fields.field_indices()["displacement"].getSize())
-                if stars:  # the Schur complement from the stars' factors
+                rows = fields.field_indices()["displacement"].getSize()
+                stars = _uses_stars(petsc_options or {}, rows)
+                coarse = _uses_coarse_schur(petsc_options or {})
+                if coarse and not stars:
+                    raise SolverOptionError(
+                        "pmg_schur_coarse needs the vertex-star smoothing: give "
+                        "pmg_smooth_stars = true to both field splits (fieldsplit_u_ and "
+                        f"lagged_fieldsplit_u_), or leave it to auto with at least "
+                        f"{p_multigrid.STARS_FROM} displacement unknowns (here {rows})",
+                        "fieldsplit_u_pmg_schur_coarse")
+                if coarse:  # the stars' Schur complement with the cycle's coarse term
+                    defaults = linear_solvers.coarse_schur_options(defaults)
+                elif stars:  # the Schur complement from the stars' factors
                     defaults = linear_solvers.star_schur_options(defaults)
                 self._block = linear_solvers.BlockPreconditioner(
                     fields, self._modes, self.scale, prefix=self.prefix, rotation=rotation,
-                    stars=stars)
+                    stars=stars, coarse=coarse)
             else:
                 self._A.setNearNullSpace(self._modes)
         self._options = {**defaults, **(petsc_options or {})}
