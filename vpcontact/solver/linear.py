@@ -106,12 +106,17 @@ STAR_SCHUR_OPTIONS = {
 }
 
 
+def _schur_prefixes(options: dict) -> set:
+    """The prefixes (none, ``lagged_``) under which ``options`` configure a Schur block."""
+    return {key[:-len("fieldsplit_p_ksp_ksp_type")] for key in options
+            if key.endswith("fieldsplit_p_ksp_ksp_type")}
+
+
 def star_schur_options(options: dict) -> dict:
     """``options`` (as :data:`MIXED_OPTIONS`, or prefixed like :func:`lagged_options`) with the
     Schur block set up for the stars' Schur complement."""
     result = dict(options)
-    for prefix in {key[:-len("fieldsplit_p_ksp_ksp_type")] for key in options
-                   if key.endswith("fieldsplit_p_ksp_ksp_type")}:
+    for prefix in _schur_prefixes(options):
         result.pop(prefix + "fieldsplit_p_ksp_ksp_chebyshev_eigenvalues", None)
         result.update({prefix + key: value for key, value in STAR_SCHUR_OPTIONS.items()})
     return result
@@ -122,8 +127,7 @@ def coarse_schur_options(options: dict) -> dict:
     the cycle's coarse term (:mod:`~vpcontact.solver.coarse_schur`; the cycle then factorizes
     its coarse level)."""
     result = star_schur_options(options)
-    for prefix in {key[:-len("fieldsplit_p_ksp_ksp_type")] for key in options
-                   if key.endswith("fieldsplit_p_ksp_ksp_type")}:
+    for prefix in _schur_prefixes(options):
         for key in [key for key in result  # (the inner KSP of pc_type ksp)
                     if key.startswith((prefix + "fieldsplit_p_ksp_ksp_",
                                        prefix + "fieldsplit_p_ksp_pc_"))]:

@@ -254,16 +254,16 @@ class PMultigrid:
             self.coarse_matrix.destroy()
         self.coarse_matrix = coarse
         self._set_up_smoother(pc, A, B)
-        if self.space.schur is not None:
+        schur = self.space.schur
+        coarse_term = schur.coarse if schur is not None else None
+        if schur is not None:
             if self.star_sweep is None:
                 raise SolverOptionError("the star Schur complement needs the vertex-star "
                                         "smoothing (pmg_smooth_stars)")
-            self.space.schur.update(self.star_sweep, pc.getOptionsPrefix() or "")
-            if self.space.schur.coarse is not None:  # its coarse term, with this A_c
-                self.space.schur.coarse.update(self.space.schur.coupling, P, coarse,
-                                               self.space.schur.matrix)
-        if self.space.schur is not None and self.space.schur.coarse is not None:
-            coarse_schur.factorize(self.coarse, coarse)  # (the coarse term is exact with it)
+            schur.update(self.star_sweep, pc.getOptionsPrefix() or "")
+        if coarse_term is not None:  # its coarse term with this A_c, exact with A_c factorized
+            coarse_term.update(schur.coupling, P, coarse, schur.matrix)
+            coarse_schur.factorize(self.coarse, coarse)
         else:
             self.coarse.setOperators(coarse)
             _set_up(self.coarse, COARSE_OPTIONS)

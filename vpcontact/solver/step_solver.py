@@ -62,27 +62,26 @@ def _longest_first_try(terms) -> int:
     return max([n for n in tries if n is not None] or [0])
 
 
-def _uses_stars(options: dict, rows: int) -> bool:
-    """Whether both of the mixed formulation's field splits (Newton's and SNES VI's lagged one)
-    smooth a displacement block of ``rows`` rows over the vertex stars (an invalid option value
-    counts as no: it is refused when the options are read)."""
+def _both_splits(options: dict, option: str, decide: Callable[[str, str], bool]) -> bool:
+    """Whether ``decide(key, value)`` holds for the ``pmg_`` ``option`` of both of the mixed
+    formulation's field splits (Newton's and SNES VI's lagged one; an invalid value counts as
+    no: it is refused when the options are read)."""
     try:
-        return all(p_multigrid.uses_stars(key, options.get(key, "auto"), rows)
-                   for key in ("fieldsplit_u_pmg_smooth_stars",
-                               "lagged_fieldsplit_u_pmg_smooth_stars"))
+        return all(decide(key, options.get(key, "auto"))
+                   for key in (f"fieldsplit_u_pmg_{option}", f"lagged_fieldsplit_u_pmg_{option}"))
     except ValueError:
         return False
+
+
+def _uses_stars(options: dict, rows: int) -> bool:
+    """Whether both field splits smooth a displacement block of ``rows`` rows over the stars."""
+    return _both_splits(options, "smooth_stars",
+                        lambda key, value: p_multigrid.uses_stars(key, value, rows))
 
 
 def _uses_coarse_schur(options: dict) -> bool:
-    """Whether both field splits' Schur blocks take the cycle's coarse term (with the stars;
-    an invalid option value counts as no: it is refused when the options are read)."""
-    try:
-        return all(p_multigrid.uses_coarse_schur(key, options.get(key, "auto"))
-                   for key in ("fieldsplit_u_pmg_schur_coarse",
-                               "lagged_fieldsplit_u_pmg_schur_coarse"))
-    except ValueError:
-        return False
+    """Whether both field splits' Schur blocks take the cycle's coarse term (with the stars)."""
+    return _both_splits(options, "schur_coarse", p_multigrid.uses_coarse_schur)
 
 
 class StepSolver:
