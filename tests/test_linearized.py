@@ -292,3 +292,80 @@ def test_the_implicit_plate_recovers_from_a_diverged_large_step():
     diff = comm.allreduce(float(np.abs(u.x.array - fine.x.array).max()), op=MPI.MAX)
     size = comm.allreduce(float(np.abs(fine.x.array).max()), op=MPI.MAX)
     assert diff <= 0.03 * size, diff / size  # (measured 1.1 %: the last steps were cut to 1/8)
+
+
+def test_step_rtol_aims_at_the_step_target():
+    """A fixed-Jacobian step's Krylov tolerance: loose at the first Newton iteration, then what
+    takes ||F|| below SNES's target, within [STEP_RTOL_FLOOR, ITERATIVE_RTOL]."""
+    from vpcontact.solver import linear
+
+    assert linear.step_rtol(0, 1.0, 1e-10) == linear.STEP_FIRST_RTOL
+    assert linear.step_rtol(1, 1e-3, 1e-10) == pytest.approx(linear.STEP_RTOL_SAFETY * 1e-7)
+    assert linear.step_rtol(1, 1.0, 1e-30) == linear.STEP_RTOL_FLOOR
+    assert linear.step_rtol(2, 1e-9, 1e-10) == linear.ITERATIVE_RTOL  # never looser than that
+
+
+def _flowing_beam(linear: str, krylov_iterations: int = 300):
+    """The paper's 3-D beam (mixed, linearized, 6×2×2 cells) pressed into contact and flowing,
+    t = 0 → 0.08 in steps of 0.02, at most ``krylov_iterations`` per solve with the iterative
+    solver: (problem, Newton iterations per step)."""
+    from vpcontact.paper import signorini as paper
+
+    problem = paper.signorini_3d(6, 2, 2, sigma_y=paper.SIGMA_Y, mu_star=paper.MU_STAR,
+                                 formulation="mixed", degree=2, linear=linear,
+                                 scheme="linearized")
+    if problem.solver.lagged_lu is not None and linear == "iterative":
+        problem.solver.lagged_lu.max_iterations = krylov_iterations
+    reports = list(advance(problem, 0.08, StepControl(0.02)))
+    return problem, [r.newton_iterations for r in reports]
+
+
+def _assert_same_answers(problem, reference):
+    comm = MPI.COMM_WORLD
+    diff = comm.allreduce(float(np.abs(problem.u.x.array - reference.u.x.array).max()),
+                          op=MPI.MAX)
+    size = comm.allreduce(float(np.abs(reference.u.x.array).max()), op=MPI.MAX)
+    assert diff <= 1e-7 * size, diff / size
+
+
+def test_aimed_krylov_solves_save_newton_iterations_and_keep_the_answers(monkeypatch):
+    """With the block preconditioner inside SNES VI, the linearized step's Krylov solves are
+    aimed (vpcontact.solver.linear.step_rtol): the direct solver's answers, in fewer Newton
+    iterations (and multigrid set-ups) than with every solve at ITERATIVE_RTOL."""
+    from vpcontact.solver import linear
+
+    direct, _ = _flowing_beam("direct")
+    aimed, aimed_its = _flowing_beam("iterative")
+    assert aimed.solver._aimed_solves
+    _assert_same_answers(aimed, direct)
+    monkeypatch.setattr(linear, "step_rtol", lambda it, fnorm, target: linear.ITERATIVE_RTOL)
+    fixed, fixed_its = _flowing_beam("iterative")
+    _assert_same_answers(fixed, direct)
+    assert len(aimed_its) == len(fixed_its)
+    assert sum(aimed_its) < sum(fixed_its), (aimed_its, fixed_its)
+    setups = aimed.solver.lagged_lu.counters()["multigrid_setups"]
+    assert setups < fixed.solver.lagged_lu.counters()["multigrid_setups"]
+
+
+def test_a_solve_aimed_beyond_reach_is_accepted_within_the_newton_tolerance(monkeypatch):
+    """A solve asked for more than the Krylov method reaches in its iterations stops short; within
+    ITERATIVE_RTOL it is still a Newton direction and is accepted (the steps converge to the
+    direct solver's answers), not a failed linear solve that cuts the step."""
+    from vpcontact.solver import linear, vi_linear
+
+    monkeypatch.setattr(linear, "STEP_RTOL_FLOOR", 1e-30)
+    monkeypatch.setattr(linear, "STEP_RTOL_SAFETY", 1e-20)  # beyond any solve's reach
+    accepted = []
+    close_enough = vi_linear.LaggedMultigrid._close_enough
+
+    def recording(self, b):
+        ok = close_enough(self, b)
+        accepted.append(ok)
+        return ok
+
+    monkeypatch.setattr(vi_linear.LaggedMultigrid, "_close_enough", recording)
+    direct, direct_its = _flowing_beam("direct")
+    aimed, aimed_its = _flowing_beam("iterative", krylov_iterations=40)
+    assert any(accepted), "no solve stopped short of its tolerance"
+    assert len(aimed_its) == len(direct_its)  # no step cut
+    _assert_same_answers(aimed, direct)

@@ -230,6 +230,7 @@ class StepSolver:
             raise rejected_option(err, petsc_options or {}) from None
         _forget(self.prefix, self._options)
         self.lagged_lu: Optional[LaggedDirectSolve | LaggedMultigrid] = None
+        self._aimed_solves = False  # Krylov tolerances set per Newton iteration (_converged)
         self._free_snes: Optional[PETSc.SNES] = None  # unconstrained Newton of a VI problem
         self._bounds = None
         self._last_active: Optional[np.ndarray] = None  # the last solve's active bounds
@@ -409,6 +410,13 @@ class StepSolver:
         # ITERATIVE_RTOL) keeps Newton's iteration count (see vpcontact.solver.linear).
         rtol = linear_solvers.ITERATIVE_RTOL if self._block is not None else 1e-9
         ksp.setTolerances(rtol=rtol, atol=0.0)
+        # With a Jacobian fixed within the step, each solve aims at what the step needs
+        # (linear_solvers.step_rtol, set by _converged); one that stops short of it but within
+        # ITERATIVE_RTOL is still a usable Newton direction.
+        self._aimed_solves = (self._block is not None
+                              and (self.constant_jacobian or self.jacobian_per_step))
+        if self._aimed_solves:
+            self.lagged_lu.accept_rtol = linear_solvers.ITERATIVE_RTOL
 
     def _lag_allowed(self) -> bool:
         """When to try lagged factors (measured on the paper's 3-D test, k = 0.01-0.02): with a
@@ -485,6 +493,10 @@ class StepSolver:
         ``crawl_its`` iterations in a row that have not halved the best ||F|| stop it too, unless
         a nodal term is ``holding`` at the last Jacobian (see :data:`CRAWL_ITERATIONS`).
 
+        Where the step's solves are aimed (a Jacobian fixed within the step, the block
+        preconditioner), the next Krylov solve's tolerance is set here from ||F|| and the target
+        (:func:`vpcontact.solver.linear.step_rtol`).
+
         The round-off stop also applies when ||F|| comes out the same to the last bit three
         times in a row: the iterate no longer moves. SNES VI's step, projected back onto the
         bounds, can leave it where it is while the step's own norm is not small: the scratch
@@ -509,6 +521,10 @@ class StepSolver:
         self._last_fnorm = fnorm
         if fnorm <= atol or fnorm <= self._force_rtol * self._force_scale:
             return _SNES_REASON.CONVERGED_FNORM_ABS
+        if self._aimed_solves:
+            target = max(atol, self._force_rtol * self._force_scale, rtol * self._fnorm0)
+            snes.getKSP().setTolerances(rtol=linear_solvers.step_rtol(it, fnorm, target),
+                                        atol=0.0)
         if it == 0:
             return _SNES_REASON.ITERATING
         if fnorm <= rtol * self._fnorm0:

@@ -381,6 +381,9 @@ class LaggedMultigrid(_ReducedSolve):
         self._ready = False
         self._fresh_iterations = 0  # iterations of the first solve with the current hierarchy
         self.allow_cg = True  # False once CG failed (then GMRES for good)
+        #: a solve that stops short of its tolerance but within this one (relative to the
+        #: right-hand side) is accepted: the caller aimed it tighter than a Newton step needs
+        self.accept_rtol: Optional[float] = None
         self.setups = 0  # multigrid hierarchies built
         self.krylov_iterations = 0
         #: called with the inner PC once M is its operator, before its set-up (the mixed
@@ -405,6 +408,8 @@ class LaggedMultigrid(_ReducedSolve):
             self._setup(rstart)
         converged = self._krylov(reduced, b, x, rtol, atol, self.max_iterations)
         self.krylov_iterations += self.krylov.getIterationNumber()
+        accepted = not converged and self._close_enough(b)
+        converged = converged or accepted
         if not converged and not fresh:
             self._setup(rstart)
             x.set(0.0)
@@ -420,6 +425,9 @@ class LaggedMultigrid(_ReducedSolve):
             converged = self._krylov(reduced, b, x, rtol, atol, self.max_iterations)
             self.krylov_iterations += self.krylov.getIterationNumber()
         its = self.krylov.getIterationNumber()
+        reason = self.krylov.getConvergedReason()
+        if accepted:
+            reason = PETSc.KSP.ConvergedReason.CONVERGED_RTOL
         if fresh:
             self._fresh_iterations = its
         elif its > self.rebuild_growth * max(self._fresh_iterations, 1):
@@ -427,7 +435,14 @@ class LaggedMultigrid(_ReducedSolve):
         if not converged:
             self._ready = False
         ksp.setIterationNumber(its)
-        ksp.setConvergedReason(self.krylov.getConvergedReason())
+        ksp.setConvergedReason(reason)
+
+    def _close_enough(self, b: PETSc.Vec) -> bool:
+        """The last Krylov solve, unconverged, still reached ``accept_rtol`` (a finite residual)."""
+        if self.accept_rtol is None:
+            return False
+        residual = self.krylov.getResidualNorm()
+        return bool(np.isfinite(residual) and residual <= self.accept_rtol * b.norm())
 
     def _setup(self, rstart: int) -> None:
         self._rebuild_matrix(rstart)
