@@ -369,3 +369,17 @@ def test_a_solve_aimed_beyond_reach_is_accepted_within_the_newton_tolerance(monk
     assert any(accepted), "no solve stopped short of its tolerance"
     assert len(aimed_its) == len(direct_its)  # no step cut
     _assert_same_answers(aimed, direct)
+
+
+def test_solves_that_stop_at_the_probe_still_reach_the_answers(monkeypatch):
+    """An aimed solve is probed at STEP_FIRST_RTOL and ends there when its direction takes an
+    inactive entry across its bound. Made to end there every time, the steps still converge to
+    the direct solver's answers (the loose directions cost Newton iterations, not accuracy)."""
+    from vpcontact.solver import vi_linear
+
+    monkeypatch.setattr(vi_linear.LaggedMultigrid, "_crosses_bounds", lambda self, y: True)
+    direct, direct_its = _flowing_beam("direct")
+    probed, probed_its = _flowing_beam("iterative")
+    assert probed.solver.lagged_lu.counters()["probe_stops"] > 0
+    assert len(probed_its) == len(direct_its)
+    _assert_same_answers(probed, direct)

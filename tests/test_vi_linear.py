@@ -116,3 +116,31 @@ def test_inner_options_are_in_the_database_only_while_read():
         assert opts.getReal("vpc_test_pc_gamg_threshold") == 0.02
     assert not opts.hasName("vpc_test_pc_type")
     assert not opts.hasName("vpc_test_pc_gamg_threshold")
+
+
+@pytest.mark.serial
+def test_a_probe_sees_a_direction_that_crosses_a_bound():
+    """The lagged multigrid's probe: SNES's next iterate x − y, y on the inactive set, against
+    the bounds (beyond 1e-8; infinite bounds never crossed; active entries not looked at)."""
+    from types import SimpleNamespace
+
+    from vpcontact.solver.vi_linear import LaggedMultigrid
+
+    def vec(values):
+        return PETSc.Vec().createWithArray(np.array(values, dtype=PETSc.ScalarType),
+                                           comm=PETSc.COMM_SELF)
+
+    x = vec([0.0, 0.0, 0.0, 1.0])
+    lower = vec([-1.0, PETSc.NINFINITY, -1.0, PETSc.NINFINITY])
+    upper = vec([PETSc.INFINITY, PETSc.INFINITY, PETSc.INFINITY, 1.5])
+    probe = SimpleNamespace(snes=SimpleNamespace(getSolution=lambda: x), bounds=(lower, upper),
+                            _inactive=np.array([0, 1, 3], dtype=np.int32),
+                            jacobian=SimpleNamespace(getComm=lambda: PETSc.COMM_SELF))
+
+    def crosses(y):
+        return LaggedMultigrid._crosses_bounds(probe, vec(y))
+
+    assert not crosses([1.0, 1e9, 0.0])  # on the lower bound; no bound below the second
+    assert not crosses([1.0 + 1e-9, 0.0, -0.5])  # within SNES VI's activity tolerance
+    assert crosses([1.0 + 1e-6, 0.0, 0.0])  # below the first's lower bound
+    assert crosses([0.0, 0.0, -0.6])  # above the last one's upper bound

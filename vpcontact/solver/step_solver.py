@@ -417,6 +417,8 @@ class StepSolver:
                               and (self.constant_jacobian or self.jacobian_per_step))
         if self._aimed_solves:
             self.lagged_lu.accept_rtol = linear_solvers.ITERATIVE_RTOL
+            self.lagged_lu.bounds = self._bounds
+            self.lagged_lu.probe_rtol = linear_solvers.STEP_FIRST_RTOL
 
     def _lag_allowed(self) -> bool:
         """When to try lagged factors (measured on the paper's 3-D test, k = 0.01-0.02): with a

@@ -384,6 +384,13 @@ class LaggedMultigrid(_ReducedSolve):
         #: a solve that stops short of its tolerance but within this one (relative to the
         #: right-hand side) is accepted: the caller aimed it tighter than a Newton step needs
         self.accept_rtol: Optional[float] = None
+        #: the VI's (lower, upper) bounds in SNES's units, and a relative tolerance: a solve
+        #: aimed tighter first stops there, and ends there if its direction takes an inactive
+        #: entry across its bound (the active set changes at the next iteration; the tighter
+        #: solve would be spent on an iterate that moves on), else it goes on from there
+        self.bounds: Optional[tuple[PETSc.Vec, PETSc.Vec]] = None
+        self.probe_rtol: Optional[float] = None
+        self.probe_stops = 0  # solves that ended at probe_rtol
         self.setups = 0  # multigrid hierarchies built
         self.krylov_iterations = 0
         #: called with the inner PC once M is its operator, before its set-up (the mixed
@@ -391,9 +398,9 @@ class LaggedMultigrid(_ReducedSolve):
         self.configure: Optional[Callable[[PETSc.PC], None]] = None
 
     def counters(self) -> dict:
-        """Hierarchies built, cycles applied, GMRES iterations."""
+        """Hierarchies built, cycles applied, GMRES iterations, solves ended at the probe."""
         return {"multigrid_setups": self.setups, "cycles": self.substitutions,
-                "krylov_iterations": self.krylov_iterations}
+                "krylov_iterations": self.krylov_iterations, "probe_stops": self.probe_stops}
 
     def expire(self) -> None:
         """Rebuild the hierarchy at the next solve."""
@@ -406,15 +413,17 @@ class LaggedMultigrid(_ReducedSolve):
         fresh = not self._ready
         if fresh:
             self._setup(rstart)
-        converged = self._krylov(reduced, b, x, rtol, atol, self.max_iterations)
-        self.krylov_iterations += self.krylov.getIterationNumber()
-        accepted = not converged and self._close_enough(b)
-        converged = converged or accepted
+
+        def attempt() -> tuple[bool, bool, int]:
+            converged, its = self._probed_krylov(reduced, b, x, rtol, atol)
+            accepted = not converged and self._close_enough(b)
+            return converged or accepted, accepted, its
+
+        converged, accepted, its = attempt()
         if not converged and not fresh:
             self._setup(rstart)
             x.set(0.0)
-            converged = self._krylov(reduced, b, x, rtol, atol, self.max_iterations)
-            self.krylov_iterations += self.krylov.getIterationNumber()
+            converged, accepted, its = attempt()
             fresh = True
         if not converged and self.krylov.getType() == "cg":
             # An inner cycle that is not positive definite (e.g. user smoothers): GMRES from
@@ -422,9 +431,7 @@ class LaggedMultigrid(_ReducedSolve):
             self.allow_cg = False
             self.use_krylov("gmres")
             x.set(0.0)
-            converged = self._krylov(reduced, b, x, rtol, atol, self.max_iterations)
-            self.krylov_iterations += self.krylov.getIterationNumber()
-        its = self.krylov.getIterationNumber()
+            converged, accepted, its = attempt()
         reason = self.krylov.getConvergedReason()
         if accepted:
             reason = PETSc.KSP.ConvergedReason.CONVERGED_RTOL
@@ -436,6 +443,52 @@ class LaggedMultigrid(_ReducedSolve):
             self._ready = False
         ksp.setIterationNumber(its)
         ksp.setConvergedReason(reason)
+
+    def _probed_krylov(self, reduced: PETSc.Mat, b: PETSc.Vec, x: PETSc.Vec, rtol: float,
+                       atol: float) -> tuple[bool, int]:
+        """Krylov on J_II x = b, probed on the way at ``probe_rtol`` where it is aimed tighter and
+        bounds are known (see :attr:`probe_rtol`): (converged, iterations)."""
+        probe = self.probe_rtol
+        probing = self.bounds is not None and probe is not None and rtol < probe
+        if probing:
+            state = {"start": None, "probed": False}
+            self.krylov.setConvergenceTest(self._probe_test, args=(rtol, atol, probe, state))
+        try:
+            converged = self._krylov(reduced, b, x, rtol, atol, self.max_iterations)
+        finally:
+            if probing:
+                self.krylov.setConvergenceTest(None)  # PETSc's default again
+        its = self.krylov.getIterationNumber()
+        self.krylov_iterations += its
+        return converged, its
+
+    def _probe_test(self, ksp: PETSc.KSP, its: int, rnorm: float, rtol: float, atol: float,
+                    probe: float, state: dict) -> int:
+        """PETSc's default test (relative to the initial residual), and once the residual is
+        below ``probe`` times it: the iterate so far ends the solve if it crosses a bound."""
+        if its == 0:
+            state["start"] = rnorm
+        if not np.isfinite(rnorm):
+            return PETSc.KSP.ConvergedReason.DIVERGED_NANORINF
+        if rnorm <= max(rtol * state["start"], atol):
+            return PETSc.KSP.ConvergedReason.CONVERGED_RTOL
+        if not state["probed"] and rnorm <= probe * state["start"]:
+            state["probed"] = True
+            if self._crosses_bounds(ksp.buildSolution()):
+                self.probe_stops += 1
+                return PETSc.KSP.ConvergedReason.CONVERGED_RTOL
+        return PETSc.KSP.ConvergedReason.ITERATING
+
+    def _crosses_bounds(self, y: PETSc.Vec) -> bool:
+        """SNES's next iterate x − y (y on the inactive set) leaves a bound somewhere (by more
+        than SNES VI's own activity tolerance, 1e-8 in x's units)."""
+        x = self.snes.getSolution().getArray(readonly=True)[self._inactive]
+        step = x - y.getArray(readonly=True)
+        lower, upper = (v.getArray(readonly=True)[self._inactive] for v in self.bounds)
+        below = (lower > PETSc.NINFINITY) & (step < lower - 1e-8)
+        above = (upper < PETSc.INFINITY) & (step > upper + 1e-8)
+        crossed = bool(np.any(below) or np.any(above))
+        return self.jacobian.getComm().tompi4py().allreduce(crossed, op=MPI.LOR)
 
     def _close_enough(self, b: PETSc.Vec) -> bool:
         """The last Krylov solve, unconverged, still reached ``accept_rtol`` (a finite residual)."""
