@@ -45,12 +45,13 @@ ITERATIVE_RTOL = 1e-4
 #: solves inside SNES VI then aim at what the step needs (:func:`step_rtol`): the first loosely
 #: (it mainly finds the contact set; the residual after it falls by ~1e-2-1e-3 whatever the
 #: tolerance), the next ones to SNES's own target, so the step ends one Newton iteration and
-#: one multigrid set-up after the contact set settles. Measured on the paper's 3-D test
-#: (linearized, t = 0.05-0.08 s, 44 508 unknowns, stars): 3.67 -> 2.67 Newton iterations and
-#: 3.2 -> 2.5 s per step; every Newton iteration at ITERATIVE_RTOL took 3.67, at 1e-10 2.67 with
-#: 42 FGMRES iterations per solve (4.2 s per step). A later solve is probed at STEP_FIRST_RTOL
-#: and ends there if its direction crosses a bound, which changes the contact set again
-#: (:attr:`~vpcontact.solver.vi_linear.LaggedMultigrid.probe_rtol`).
+#: one multigrid set-up after the contact set settles. A later solve is probed at
+#: STEP_FIRST_RTOL and ends there if its direction crosses a bound, which changes the contact
+#: set again (``probe_rtol`` of :class:`~vpcontact.solver.vi_linear.LaggedMultigrid`).
+#: Measured on the paper's 3-D test (linearized, t = 0.05-0.08 s, 44 508 unknowns): 3.67 ->
+#: 2.67 Newton iterations and 3.87 -> 2.85 s per step (every solve at 1e-10: 2.67 Newton
+#: iterations of 42 FGMRES iterations each, slower than at ITERATIVE_RTOL); README, "Aimed
+#: Krylov tolerances".
 STEP_FIRST_RTOL = 1e-2
 #: (the tightest relative tolerance asked of one solve, and the margin below SNES's target)
 STEP_RTOL_FLOOR, STEP_RTOL_SAFETY = 1e-8, 0.5

@@ -385,9 +385,9 @@ class LaggedMultigrid(_ReducedSolve):
         #: right-hand side) is accepted: the caller aimed it tighter than a Newton step needs
         self.accept_rtol: Optional[float] = None
         #: the VI's (lower, upper) bounds in SNES's units, and a relative tolerance: a solve
-        #: aimed tighter first stops there, and ends there if its direction takes an inactive
-        #: entry across its bound (the active set changes at the next iteration; the tighter
-        #: solve would be spent on an iterate that moves on), else it goes on from there
+        #: aimed tighter is probed when its residual passes it, and ends there if the direction
+        #: so far takes an inactive entry across its bound (the active set changes at the next
+        #: iteration; a tighter solve would be spent on an iterate that moves on)
         self.bounds: Optional[tuple[PETSc.Vec, PETSc.Vec]] = None
         self.probe_rtol: Optional[float] = None
         self.probe_stops = 0  # solves that ended at probe_rtol
