@@ -491,7 +491,8 @@ class LaggedMultigrid(_ReducedSolve):
         return self.jacobian.getComm().tompi4py().allreduce(crossed, op=MPI.LOR)
 
     def _close_enough(self, b: PETSc.Vec) -> bool:
-        """The last Krylov solve, unconverged, still reached ``accept_rtol`` (a finite residual)."""
+        """The last Krylov solve, unconverged, still reached ``accept_rtol`` (a finite
+        residual)."""
         if self.accept_rtol is None:
             return False
         residual = self.krylov.getResidualNorm()
