@@ -10,6 +10,7 @@ from petsc4py import PETSc
 
 from vpcontact.errors import SolverOptionError
 from vpcontact.solver import coarse_schur
+import flowing_beam
 
 COMM = MPI.COMM_WORLD
 
@@ -76,16 +77,9 @@ def test_the_pressure_solve_is_the_inverse_of_shat_with_the_coarse_term():
 
 
 def _run(coarse: str):
-    from vpcontact.paper import signorini as paper
-    from vpcontact.solver import StepControl, advance
-
     options = {f"{split}fieldsplit_u_pmg_{key}": value for split in ("", "lagged_")
                for key, value in (("smooth_stars", "true"), ("schur_coarse", coarse))}
-    problem = paper.signorini_3d(6, 2, 2, petsc_options=options, sigma_y=paper.SIGMA_Y,
-                                 mu_star=paper.MU_STAR, formulation="mixed", degree=2,
-                                 linear="iterative", scheme="linearized")
-    steps = list(advance(problem, 0.08, StepControl(0.02)))
-    return problem, steps
+    return flowing_beam.run(options=options)
 
 
 def test_with_the_coarse_term_the_answers_stay():

@@ -18,6 +18,7 @@ from vpcontact.errors import InputError
 from vpcontact.model import Elasticity, LinearRate, Perzyna
 from vpcontact.scene import build, loads_text
 from vpcontact.solver import StepControl, advance
+import flowing_beam
 from mpi_launch import write_shared
 
 E, NU, SY, MU = 100.0, 0.3, 1.0, 1.0
@@ -305,18 +306,9 @@ def test_step_rtol_aims_at_the_step_target():
     assert linear.step_rtol(2, 1e-9, 1e-10) == linear.ITERATIVE_RTOL  # never looser than that
 
 
-def _flowing_beam(linear: str, krylov_iterations: int = 300):
-    """The paper's 3-D beam (mixed, linearized, 6×2×2 cells) pressed into contact and flowing,
-    t = 0 → 0.08 in steps of 0.02, at most ``krylov_iterations`` per solve with the iterative
-    solver: (problem, Newton iterations per step)."""
-    from vpcontact.paper import signorini as paper
-
-    problem = paper.signorini_3d(6, 2, 2, sigma_y=paper.SIGMA_Y, mu_star=paper.MU_STAR,
-                                 formulation="mixed", degree=2, linear=linear,
-                                 scheme="linearized")
-    if problem.solver.lagged_lu is not None and linear == "iterative":
-        problem.solver.lagged_lu.max_iterations = krylov_iterations
-    reports = list(advance(problem, 0.08, StepControl(0.02)))
+def _flowing_beam(linear: str, krylov_iterations: int | None = None):
+    """The tests' flowing beam (:mod:`flowing_beam`): (problem, Newton iterations per step)."""
+    problem, reports = flowing_beam.run(linear, krylov_iterations=krylov_iterations)
     return problem, [r.newton_iterations for r in reports]
 
 

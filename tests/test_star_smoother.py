@@ -14,6 +14,7 @@ from mpi4py import MPI
 from vpcontact import _cpp
 from vpcontact.errors import SolverOptionError
 from vpcontact.solver import star_smoother
+import flowing_beam
 
 COMM = MPI.COMM_WORLD
 
@@ -248,16 +249,8 @@ def test_the_patches_schur_complements_equal_dense_ones():
 
 
 def _stars_run(stars: str):
-    from vpcontact.paper import signorini as paper
-    from vpcontact.solver import StepControl, advance
-
-    options = {"lagged_fieldsplit_u_pmg_smooth_stars": stars,
-               "fieldsplit_u_pmg_smooth_stars": stars}
-    problem = paper.signorini_3d(6, 2, 2, petsc_options=options, sigma_y=paper.SIGMA_Y,
-                                 mu_star=paper.MU_STAR, formulation="mixed", degree=2,
-                                 linear="iterative", scheme="linearized")
-    steps = list(advance(problem, 0.08, StepControl(0.02)))
-    return problem, steps
+    return flowing_beam.run(options={"lagged_fieldsplit_u_pmg_smooth_stars": stars,
+                                     "fieldsplit_u_pmg_smooth_stars": stars})
 
 
 def test_with_the_stars_the_schur_block_is_theirs_and_the_answers_stay():
