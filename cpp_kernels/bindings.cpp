@@ -263,31 +263,38 @@ PYBIND11_MODULE(_cpp, m)
       .def(
           "factorize",
           [](PatchSmoother& self, const IndexArray& row_start, const IndexArray& columns,
-             const InArray& values, std::int64_t first_column)
+             const InArray& values, std::int64_t first_column,
+             const std::optional<IndexArray>& patches)
           {
             const LocalCsr A = local_csr(row_start, columns, values, first_column);
+            const std::int64_t* listed = patches ? patches->data() : nullptr;
+            const std::size_t count = patches ? static_cast<std::size_t>(patches->size()) : 0;
             py::gil_scoped_release release;
-            self.factorize(A);
+            self.factorize(A, listed, count);
           },
           py::arg("row_start"), py::arg("columns"), py::arg("values"),
-          py::arg("first_column") = 0)
+          py::arg("first_column") = 0, py::arg("patches") = py::none())
       .def(
           "schur_sum",
           [](const PatchSmoother& self, const IndexArray& row_start, const IndexArray& columns,
-             const InArray& values)
+             const InArray& values, const std::optional<IndexArray>& patches)
           {
             const LocalCsr Bt = local_csr(row_start, columns, values, 0);
-            std::vector<std::int64_t> rows, cols;
+            const std::int64_t* listed = patches ? patches->data() : nullptr;
+            const std::size_t count = patches ? static_cast<std::size_t>(patches->size()) : 0;
+            std::vector<std::int64_t> rows, cols, starts;
             std::vector<double> entries;
             {
               py::gil_scoped_release release;
-              self.schur_sum(Bt, rows, cols, entries);
+              self.schur_sum(Bt, rows, cols, entries, starts, listed, count);
             }
             return py::make_tuple(py::array_t<std::int64_t>(rows.size(), rows.data()),
                                   py::array_t<std::int64_t>(cols.size(), cols.data()),
-                                  py::array_t<double>(entries.size(), entries.data()));
+                                  py::array_t<double>(entries.size(), entries.data()),
+                                  py::array_t<std::int64_t>(starts.size(), starts.data()));
           },
-          py::arg("row_start"), py::arg("columns"), py::arg("values"))
+          py::arg("row_start"), py::arg("columns"), py::arg("values"),
+          py::arg("patches") = py::none())
       .def(
           "apply",
           [](const PatchSmoother& self, const InArray& r, OutArray& y, double omega)

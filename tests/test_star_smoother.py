@@ -236,7 +236,8 @@ def test_the_patches_schur_complements_equal_dense_ones():
     Bt = np.random.default_rng(2).standard_normal((30, 7))
     Bt[np.abs(Bt) < 0.8] = 0.0
     starts, columns, values = _csr(Bt)
-    rows, cols, entries = smoother.schur_sum(starts, columns + 100, values)
+    rows, cols, entries, patch_starts = smoother.schur_sum(starts, columns + 100, values)
+    assert patch_starts[0] == 0 and patch_starts[-1] == len(entries) and len(patch_starts) == 4
     result = np.zeros((7, 7))
     np.add.at(result, (rows - 100, cols - 100), entries)
     expected = np.zeros((7, 7))
@@ -246,6 +247,40 @@ def test_the_patches_schur_complements_equal_dense_ones():
     assert np.allclose(result, expected, rtol=0, atol=1e-12)
     with pytest.raises(ValueError, match="Bt: 29 rows, the patches have 30"):
         smoother.schur_sum(*_csr(Bt[:29]))
+
+
+@pytest.mark.serial
+def test_refactorizing_the_changed_patches_equals_a_full_refactorization():
+    """After rows and columns of A are replaced by the identity (SNES VI's active set moving),
+    refactorizing only the patches that hold them gives the sweep and Schur terms of a full
+    refactorization, to the last bit; the other patches keep theirs."""
+    A = _matrix()
+    offsets, indices = _patches()
+    Bt = np.random.default_rng(2).standard_normal((30, 7))
+    Bt[np.abs(Bt) < 0.8] = 0.0
+    changed = np.array([3, 4])  # in patch 0 only
+    A2, Bt2 = A.copy(), Bt.copy()
+    A2[changed, :] = A2[:, changed] = 0.0
+    A2[changed, changed] = 1.0
+    Bt2[changed] = 0.0
+    partial = _cpp.PatchSmoother(offsets, indices, 30)
+    partial.factorize(*_csr(A))
+    full = _cpp.PatchSmoother(offsets, indices, 30)
+    full.factorize(*_csr(A2))
+    patches = np.array([0], dtype=np.int64)
+    partial.factorize(*_csr(A2), patches=patches)
+    b = np.random.default_rng(1).standard_normal(30)
+    y, y_full = np.zeros(30), np.zeros(30)
+    partial.apply(b, y, 0.5)
+    full.apply(b, y_full, 0.5)
+    assert np.array_equal(y, y_full)
+    _, _, entries, starts = full.schur_sum(*_csr(Bt2))
+    _, _, some, some_starts = partial.schur_sum(*_csr(Bt2), patches=patches)
+    assert np.array_equal(some, entries[starts[0]:starts[1]]) and list(some_starts) == [0, starts[1]]
+    with pytest.raises(ValueError, match="patches: 3 is not a patch"):
+        partial.factorize(*_csr(A2), patches=np.array([3], dtype=np.int64))
+    with pytest.raises(ValueError, match="factorize all of them first"):
+        _cpp.PatchSmoother(offsets, indices, 30).factorize(*_csr(A2), patches=patches)
 
 
 def _stars_run(stars: str):

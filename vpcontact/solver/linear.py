@@ -236,6 +236,7 @@ class BlockPreconditioner:
         """Reassemble the Schur preconditioner from the current tangent (S_p; the stars' is
         reassembled with the cycle) and have the lagged VI solver rebuild the field split at
         its next solve."""
+        self.coarse_space.jacobian_version += 1
         if self.star_schur is None:
             self.assemble_mass()
         if self.solver is not None and REBUILD_WITH_EVERY_JACOBIAN:

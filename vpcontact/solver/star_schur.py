@@ -55,10 +55,14 @@ class StarSchur:
         self._coupling = self._pressure = None  # M's (u, p) and (p, p) blocks, kept
         self._pattern: Optional[tuple[np.ndarray, np.ndarray]] = None
         self._order = self._starts = self._rows = self._columns = None
+        self._terms = self._terms_of = None  # the stars' terms, and (sweep, prefix) they are of
 
-    def update(self, sweep: star_smoother.StarSmoother, prefix: str) -> None:
+    def update(self, sweep: star_smoother.StarSmoother, prefix: str,
+               stars: Optional[np.ndarray] = None) -> None:
         """Reassemble Ŝ from the stars' factors in ``sweep`` and the matrix of the field split
-        whose displacement block has options ``prefix``."""
+        whose displacement block has options ``prefix``. ``stars``: only these stars' blocks
+        changed since the last update with the same ``sweep`` and ``prefix`` (the same tangent,
+        another active set): the others' terms are kept."""
         parent = prefix[:-len("fieldsplit_u_")] if prefix.endswith("fieldsplit_u_") else None
         if parent not in self.parents:
             raise RuntimeError(f"StarSchur: no field split registered for {prefix!r}")
@@ -66,7 +70,22 @@ class StarSchur:
         self._coupling = M.createSubMatrix(self.is_u, self.is_p, submat=self._coupling)
         self._pressure = M.createSubMatrix(self.is_p, self.is_p, submat=self._pressure)
         starts, columns, values = self._coupling.getValuesCSR()
-        star_rows, star_cols, star_values = sweep.schur_sum(starts, columns, values)
+        key = (id(sweep), prefix)
+        terms = self._terms if stars is not None and self._terms_of == key else None
+        if terms is not None:
+            star_rows, star_cols, star_values, star_starts = terms
+            _, _, changed, changed_starts = sweep.schur_sum(starts, columns, values, stars)
+            lengths = star_starts[stars + 1] - star_starts[stars]
+            if np.array_equal(np.diff(changed_starts), lengths):
+                # (the same pattern: each star's m x m terms in place)
+                at = np.repeat(star_starts[stars] - changed_starts[:-1], lengths)
+                star_values[at + np.arange(len(changed))] = changed
+            else:
+                terms = None
+        if terms is None:
+            star_rows, star_cols, star_values, star_starts = sweep.schur_sum(starts, columns,
+                                                                             values)
+        self._terms, self._terms_of = (star_rows, star_cols, star_values, star_starts), key
         starts, columns, values = self._pressure.getValuesCSR()
         first = self._pressure.getOwnershipRange()[0]
         rows = np.concatenate([first + np.repeat(np.arange(len(starts) - 1), np.diff(starts)),

@@ -505,7 +505,10 @@ class LaggedMultigrid(_ReducedSolve):
         self.use_krylov("cg" if self.allow_cg and self._matrix_is_symmetric() else "gmres")
         self.inner.setOperators(self.matrix)
         with options_in_database(self.prefix, self.options):
-            if self.configure is not None:
+            if self.configure is not None and self.setups == 0:
+                # (once: setFromOptions makes the field split's blocks anew, and with them
+                # every python sub-PC — the p-multigrid's coarse matrix, prolongation and GAMG
+                # hierarchy would be built from nothing at every set-up)
                 self.inner.setFromOptions()
                 self.configure(self.inner.getPC())
             self.inner.setUp()
