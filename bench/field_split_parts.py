@@ -8,9 +8,10 @@ step is captured and solved again by GMRES (rtol 1e-4 and 1e-8, as the VI's lagg
 with each part of the field split swapped for its exact counterpart:
 
 * ``as_used``: vpcontact's solver: one p-multigrid cycle on the displacement block A and, below
-  40 000 displacement unknowns, three Chebyshev–Jacobi sweeps on the weighted pressure mass S_p
+  15 000 displacement unknowns (``p_multigrid.STARS_FROM``), three Chebyshev–Jacobi sweeps
+  on the weighted pressure mass S_p
   (each point's shear compliance, capped at 10 times that of its pressure nodes' patch mean
-  stiffness), from 40 000 on (with the vertex stars) six on the stars' Schur complement Ŝ;
+  stiffness), from 15 000 on (with the vertex stars) six on the stars' Schur complement Ŝ;
 * ``mass``: the stars' cycle with S_p (as used before Ŝ); ``star_schur_lu``: with Ŝ factorized;
   ``coarse_schur``: with Ŝ and the cycle's coarse term, the coarse level factorized
   (``pmg_schur_coarse``, :mod:`vpcontact.solver.coarse_schur`);

@@ -56,11 +56,13 @@ from vpcontact.solver.vi_linear import rigid_body_modes
 
 #: Displacement blocks from this many rows on are smoothed over the vertex stars (option
 #: ``pmg_smooth_stars auto``, the default). Measured in the time loop of the paper's 3-D test
-#: (its data, iterative solver, k = 0.01; README): the stars cost 1.2–1.4× the Chebyshev–Jacobi
-#: sweeps' time per step at 6 400 and 19 690 unknowns, where the Krylov counts are about the same,
-#: and save 14 % at 44 508 and 33 % at 143 128 unknowns, where the flowing steps' counts had
-#: grown (54.7 → 46.3 and 81.6 → 54.5 FGMRES iterations per Newton iteration).
-STARS_FROM = 40_000
+#: (its data, iterative solver, k = 0.01; README), with the column-stored star factors and the
+#: stars refactorized only where the active set changed: per step, the stars cost 1.15× the
+#: Chebyshev–Jacobi sweeps' time at 6 400 unknowns (6 018 rows), tie at 11 829 (11 253 rows),
+#: and save 25 % (linearized scheme, t = 0.05–0.08) and 12 % (implicit, t = 0.3–0.4; its run
+#: from t = 0 took 5 min instead of 17) at 19 690 (18 759 rows). (It was 40 000 while a sweep
+#: cost 1.7× what it costs now.)
+STARS_FROM = 15_000
 
 #: Options of the KSP smoothing on the P2 level (smaller blocks, or ``pmg_smooth_stars false``): two
 #: Chebyshev–Jacobi sweeps (before and after the coarse correction), the spectrum bound

@@ -396,6 +396,7 @@ class LaggedMultigrid(_ReducedSolve):
         #: called with the inner PC once M is its operator, before its set-up (the mixed
         #: formulation's field split: index sets and the Schur preconditioner)
         self.configure: Optional[Callable[[PETSc.PC], None]] = None
+        self._split_made = False  # the inner PC has read its options and been configured
 
     def counters(self) -> dict:
         """Hierarchies built, cycles applied, GMRES iterations, solves ended at the probe."""
@@ -505,12 +506,13 @@ class LaggedMultigrid(_ReducedSolve):
         self.use_krylov("cg" if self.allow_cg and self._matrix_is_symmetric() else "gmres")
         self.inner.setOperators(self.matrix)
         with options_in_database(self.prefix, self.options):
-            if self.configure is not None and self.setups == 0:
+            if self.configure is not None and not self._split_made:
                 # (once: setFromOptions makes the field split's blocks anew, and with them
                 # every python sub-PC — the p-multigrid's coarse matrix, prolongation and GAMG
                 # hierarchy would be built from nothing at every set-up)
                 self.inner.setFromOptions()
                 self.configure(self.inner.getPC())
+                self._split_made = True
             self.inner.setUp()
             pc = self.inner.getPC()
             if pc.getType() == "fieldsplit":
