@@ -144,3 +144,34 @@ def test_a_probe_sees_a_direction_that_crosses_a_bound():
     assert not crosses([1.0 + 1e-9, 0.0, -0.5])  # within SNES VI's activity tolerance
     assert crosses([1.0 + 1e-6, 0.0, 0.0])  # below the first's lower bound
     assert crosses([0.0, 0.0, -0.6])  # above the last one's upper bound
+
+
+@pytest.mark.serial
+def test_a_probe_sees_a_direction_that_releases_an_active_entry():
+    """The probe's other half: an entry on its bound, outside the inactive set, whose residual
+    after the step, F − J y, would pull it off (SNES VI frees it at the next iteration)."""
+    from types import SimpleNamespace
+
+    from vpcontact.solver.vi_linear import LaggedMultigrid
+
+    def vec(values):
+        return PETSc.Vec().createWithArray(np.array(values, dtype=PETSc.ScalarType),
+                                           comm=PETSc.COMM_SELF)
+
+    J = PETSc.Mat().createDense((3, 3), array=np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0],
+                                                          [0.0, -1.0, 2.0]]),
+                                comm=PETSc.COMM_SELF)
+    x, F = vec([0.0, 0.5, 0.5]), vec([1.0, 0.0, 0.0])  # entry 0 pressed onto its lower bound
+    lower = vec([0.0, PETSc.NINFINITY, PETSc.NINFINITY])
+    upper = vec([PETSc.INFINITY] * 3)
+    snes = SimpleNamespace(getSolution=lambda: x, getFunction=lambda: (F, None))
+    probe = SimpleNamespace(snes=snes, bounds=(lower, upper), jacobian=J,
+                            _inactive=np.array([1, 2], dtype=np.int32),
+                            _probe_work=None, _probe_change=None)
+
+    def releases(y):
+        return LaggedMultigrid._releases(probe, vec(y))
+
+    # F_0 after the step: 1 − (J y)_0 = 1 + y_1
+    assert not releases([0.5, 0.0]) and not releases([-0.9, 3.0])
+    assert releases([-1.5, 0.0])
