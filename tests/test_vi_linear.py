@@ -118,6 +118,12 @@ def test_inner_options_are_in_the_database_only_while_read():
     assert not opts.hasName("vpc_test_pc_gamg_threshold")
 
 
+def _vec(values):
+    """A serial PETSc vector of ``values``."""
+    return PETSc.Vec().createWithArray(np.array(values, dtype=PETSc.ScalarType),
+                                       comm=PETSc.COMM_SELF)
+
+
 @pytest.mark.serial
 def test_a_probe_sees_a_direction_that_crosses_a_bound():
     """The lagged multigrid's probe: SNES's next iterate x − y, y on the inactive set, against
@@ -126,19 +132,15 @@ def test_a_probe_sees_a_direction_that_crosses_a_bound():
 
     from vpcontact.solver.vi_linear import LaggedMultigrid
 
-    def vec(values):
-        return PETSc.Vec().createWithArray(np.array(values, dtype=PETSc.ScalarType),
-                                           comm=PETSc.COMM_SELF)
-
-    x = vec([0.0, 0.0, 0.0, 1.0])
-    lower = vec([-1.0, PETSc.NINFINITY, -1.0, PETSc.NINFINITY])
-    upper = vec([PETSc.INFINITY, PETSc.INFINITY, PETSc.INFINITY, 1.5])
+    x = _vec([0.0, 0.0, 0.0, 1.0])
+    lower = _vec([-1.0, PETSc.NINFINITY, -1.0, PETSc.NINFINITY])
+    upper = _vec([PETSc.INFINITY, PETSc.INFINITY, PETSc.INFINITY, 1.5])
     probe = SimpleNamespace(snes=SimpleNamespace(getSolution=lambda: x), bounds=(lower, upper),
                             _inactive=np.array([0, 1, 3], dtype=np.int32),
                             jacobian=SimpleNamespace(getComm=lambda: PETSc.COMM_SELF))
 
     def crosses(y):
-        return LaggedMultigrid._crosses_bounds(probe, vec(y))
+        return LaggedMultigrid._crosses_bounds(probe, _vec(y))
 
     assert not crosses([1.0, 1e9, 0.0])  # on the lower bound; no bound below the second
     assert not crosses([1.0 + 1e-9, 0.0, -0.5])  # within SNES VI's activity tolerance
@@ -154,23 +156,19 @@ def test_a_probe_sees_a_direction_that_releases_an_active_entry():
 
     from vpcontact.solver.vi_linear import LaggedMultigrid
 
-    def vec(values):
-        return PETSc.Vec().createWithArray(np.array(values, dtype=PETSc.ScalarType),
-                                           comm=PETSc.COMM_SELF)
-
     J = PETSc.Mat().createDense((3, 3), array=np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0],
                                                           [0.0, -1.0, 2.0]]),
                                 comm=PETSc.COMM_SELF)
-    x, F = vec([0.0, 0.5, 0.5]), vec([1.0, 0.0, 0.0])  # entry 0 pressed onto its lower bound
-    lower = vec([0.0, PETSc.NINFINITY, PETSc.NINFINITY])
-    upper = vec([PETSc.INFINITY] * 3)
+    x, F = _vec([0.0, 0.5, 0.5]), _vec([1.0, 0.0, 0.0])  # entry 0 pressed onto its lower bound
+    lower = _vec([0.0, PETSc.NINFINITY, PETSc.NINFINITY])
+    upper = _vec([PETSc.INFINITY] * 3)
     snes = SimpleNamespace(getSolution=lambda: x, getFunction=lambda: (F, None))
     probe = SimpleNamespace(snes=snes, bounds=(lower, upper), jacobian=J,
                             _inactive=np.array([1, 2], dtype=np.int32),
                             _probe_work=None, _probe_change=None)
 
     def releases(y):
-        return LaggedMultigrid._releases(probe, vec(y))
+        return LaggedMultigrid._releases(probe, _vec(y))
 
     # F_0 after the step: 1 − (J y)_0 = 1 + y_1
     assert not releases([0.5, 0.0]) and not releases([-0.9, 3.0])

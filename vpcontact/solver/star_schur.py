@@ -88,13 +88,15 @@ class StarSchur:
         self._terms, self._terms_of = (star_rows, star_cols, star_values, star_starts), key
         starts, columns, values = self._pressure.getValuesCSR()
         first = self._pressure.getOwnershipRange()[0]
-        rows = np.concatenate([first + np.repeat(np.arange(len(starts) - 1), np.diff(starts)),
-                               star_rows]).astype(PETSc.IntType)
-        cols = np.concatenate([columns, star_cols]).astype(PETSc.IntType)
         entries = np.concatenate([values, -star_smoother.DAMPING * star_values])
-        if self._pattern is None or not (np.array_equal(rows, self._pattern[0])
-                                         and np.array_equal(cols, self._pattern[1])):
-            self._new_pattern(rows, cols)
+        if terms is None:  # (kept terms: M's pattern and the stars' layout are as they were)
+            rows = np.concatenate([first + np.repeat(np.arange(len(starts) - 1),
+                                                     np.diff(starts)),
+                                   star_rows]).astype(PETSc.IntType)
+            cols = np.concatenate([columns, star_cols]).astype(PETSc.IntType)
+            if self._pattern is None or not (np.array_equal(rows, self._pattern[0])
+                                             and np.array_equal(cols, self._pattern[1])):
+                self._new_pattern(rows, cols)
         self.matrix.zeroEntries()
         self.matrix.setValuesIJV(self._starts, self._columns, entries[self._order],
                                  addv=PETSc.InsertMode.ADD_VALUES, rowmap=self._rows)
