@@ -22,7 +22,8 @@ with each part of the field split swapped for its exact counterpart:
   cycle Ã formed column by column and factorized (far too dear to use: a diagnosis);
 * ``exact_both``: A factorized and the Schur complement of A formed and factorized;
 * ``coarse_lu``, ``four_sweeps``: the p-multigrid cycle with its P1 level factorized, or with
-  four Chebyshev–Jacobi sweeps instead of two;
+  four Chebyshev–Jacobi sweeps instead of two; ``coarse_lu_stars``: the stars' cycle (and Ŝ)
+  with its P1 level factorized;
 * ``stars``, ``chebyshev``: the cycle's P2 level smoothed over the vertex stars, or by two
   Chebyshev–Jacobi sweeps, whatever the size (``as_used`` chooses by it);
   ``stars_formed_schur``: the stars' cycle with its Schur complement formed and factorized.
@@ -63,6 +64,9 @@ VARIANTS = {"as_used": (False, False, {}), "cell_weights": (False, False, {}),
             "coarse_lu": (False, False, {"fieldsplit_u_pmg_coarse_pc_type": "lu",
                                          "fieldsplit_u_pmg_coarse_pc_factor_mat_solver_type":
                                          "mumps", "fieldsplit_u_pmg_smooth_stars": "false"}),
+            "coarse_lu_stars": (False, False, {"fieldsplit_u_pmg_coarse_pc_type": "lu",
+                                               "fieldsplit_u_pmg_coarse_pc_factor_mat_solver_type":
+                                               "mumps", "fieldsplit_u_pmg_smooth_stars": "true"}),
             "four_sweeps": (False, False, {"fieldsplit_u_pmg_smooth_ksp_max_it": 4,
                                            "fieldsplit_u_pmg_smooth_stars": "false"}),
             # the P2 level's smoothing chosen (as_used: by the block's size)
@@ -85,7 +89,7 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
     prefix = solver.prefix + f"parts_{name}_"
     coarse = name == "coarse_schur"
     star = not formed and (name.startswith("star_schur") or coarse
-                           or (name == "as_used" and block.star_schur is not None))
+                           or name == "coarse_lu_stars" or (name == "as_used" and block.star_schur is not None))
     options = linear_solvers.lagged_options(True)
     if coarse:
         options = linear_solvers.coarse_schur_options(options)

@@ -21,14 +21,15 @@ the system is solved directly. Near convergence, where the tangent barely change
 iteration then costs a few substitutions instead of a factorization; the worst case costs a
 bounded number of wasted substitutions more than PETSc's own approach.
 
-:class:`LaggedMultigrid` is the same construction with one algebraic multigrid cycle (GAMG, with
-the rigid-body modes as near null space) on M instead of its factors: GAMG cannot work on SNES
-VI's reduced matrices (they change size), it can on M. It is an option for meshes too large to
-factorize; on the plastic tangent of the paper's data (stiffness contrast k E/μ* between points)
-GMRES needs hundreds of iterations per solve, so it is not the default.
+:class:`LaggedMultigrid` is the same construction with a preconditioner built on M instead of
+its factors (the reduced matrices change size; M does not): for the displacement formulation one
+GAMG cycle with the rigid-body modes, for the mixed one the block preconditioner of
+:mod:`vpcontact.solver.linear` (a field split of M by the fields' index sets, p-multigrid on the
+displacement block). Where the step's Jacobian is fixed its solves are aimed and probed (see
+:attr:`LaggedMultigrid.probe_rtol`).
 
-(About 420 lines: both solvers share the embedding of the reduced systems, ``_ReducedSolve``,
-and are documented together with the construction they share.)
+(Both solvers share the embedding of the reduced systems, ``_ReducedSolve``, and are documented
+together with the construction they share.)
 """
 
 from __future__ import annotations
