@@ -333,13 +333,22 @@ def test_p_multigrid_interpolation_is_exact_on_p1_fields(rotated):
     space.destroy()
 
 
-def test_auto_linear_solver_by_size_and_formulation():
+def test_auto_linear_solver_by_size_formulation_and_scheme():
     from vpcontact.linear_solvers import ITERATIVE_FROM, choose
-    for formulation, threshold in ITERATIVE_FROM.items():
-        assert choose("auto", threshold - 1, formulation) == "direct"
-        assert choose("auto", threshold, formulation) == "iterative"
-        assert choose("direct", 10 * threshold, formulation) == "direct"
-        assert choose("iterative", 10, formulation) == "iterative"
+    cases = {"displacement": ("displacement", False), "mixed": ("mixed", False),
+             "mixed_per_step": ("mixed", True)}
+    assert set(cases) == set(ITERATIVE_FROM)
+    for key, (formulation, per_step) in cases.items():
+        threshold = ITERATIVE_FROM[key]
+        assert choose("auto", threshold - 1, formulation, per_step) == "direct"
+        assert choose("auto", threshold, formulation, per_step) == "iterative"
+        assert choose("auto", 10 * threshold, formulation, per_step,
+                      iterative_possible=False) == "direct"
+        assert choose("direct", 10 * threshold, formulation, per_step) == "direct"
+        assert choose("iterative", 10, formulation, per_step) == "iterative"
+    # a fixed per-step Jacobian lowers the threshold of the mixed formulation only
+    assert ITERATIVE_FROM["mixed_per_step"] < ITERATIVE_FROM["mixed"]
+    assert choose("auto", ITERATIVE_FROM["mixed_per_step"], "displacement", True) == "direct"
     with pytest.raises(ValueError, match="must be one of"):
         choose("cg", 10)
 

@@ -187,7 +187,9 @@ class StepSolver:
         self.snes.setOptionsPrefix(self.prefix)
         mixed = len(fields.functions) > 1
         self.linear = linear_solvers.choose(linear, self._x.getSize(),
-                                            "mixed" if mixed else "displacement")
+                                            "mixed" if mixed else "displacement",
+                                            per_step=self.jacobian_per_step,
+                                            iterative_possible=not driven)
         self._modes = None  # rigid-body modes (in the SNES layout), for multigrid
         self._block = None  # the fieldsplit set-up of the mixed formulation
         defaults = dict(DEFAULT_OPTIONS)
