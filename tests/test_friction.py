@@ -793,6 +793,35 @@ def test_contact_csv_holds_a_signorini_part_s_friction(shared_tmp_path):
                        -0.3 * last[inside, col["pressure"]], rtol=1e-6)
 
 
+@pytest.mark.parametrize("floor", ["rigid", "compliant"])
+def test_reactions_split_each_part_s_force_into_normal_and_tangential(shared_tmp_path, floor):
+    """With friction reactions.csv and summary.json add each contact part's normal force and
+    the magnitude of its tangential force. On the flat floor they are the contact force's
+    components (N = F_y, |T| = |F_x| to round-off), |T| = 𝔣 N while the block slides, and a
+    run resumed from its last checkpoint writes the same file."""
+    coulomb = 'friction = { type = "coulomb", coefficient = 0.3 }'
+    text = (_signorini_dragged(PLANE_FLOOR) if floor == "rigid"
+            else DRAGGED.replace("FRICTION", coulomb))
+    text = text.replace("figures = false\n", "figures = false\ncheckpoint_every = 4\n")
+    scene = write_shared(shared_tmp_path / f"split_{floor}.toml", text)
+    out = shared_tmp_path / f"split_{floor}"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    f = _forces(out)
+    scale = np.abs(f["contact_y"]).max()
+    assert np.allclose(f["bottom_normal"], f["contact_y"], rtol=0, atol=1e-12 * scale)
+    assert np.allclose(f["bottom_tangential"], np.abs(f["contact_x"]), rtol=0,
+                       atol=1e-12 * scale)
+    sliding = f["t"] >= 0.7
+    assert np.allclose(f["bottom_tangential"][sliding], 0.3 * f["bottom_normal"][sliding],
+                       rtol=1e-6)
+    part = json.loads((out / "summary.json").read_text())["reactions"]["contact_parts"]["bottom"]
+    assert part["normal_force"]["final"] == pytest.approx(f["bottom_normal"][-1], rel=1e-9)
+    assert np.allclose(part["tangential_force"]["history"], f["bottom_tangential"], rtol=1e-9)
+    written = (out / "reactions.csv").read_bytes()
+    assert cli.main(["run", str(scene), "--out", str(out), "--resume", "--quiet"]) == 0
+    assert (out / "reactions.csv").read_bytes() == written
+
+
 ROLLER_RADIUS, ROLLER_CENTRE = 20.0, np.array([0.5, -20.0, 0.0])
 
 

@@ -154,7 +154,8 @@ def forces_arrays(forces) -> dict:
     driver = [np.nan if d is None else d for d in forces.driver]
     return {"forces_times": np.array(forces.times), "forces_reactions": np.array(forces.reactions),
             "forces_contact": np.array(forces.parts), "forces_driver": np.array(driver),
-            "forces_driven": np.array([d is not None for d in forces.driver])}
+            "forces_driven": np.array([d is not None for d in forces.driver]),
+            **({"forces_components": np.array(forces.components)} if forces.split else {})}
 
 
 def load(out: Path, problem, scene, comm) -> Restart:

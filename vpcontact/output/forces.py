@@ -7,7 +7,10 @@ obstacle or foundation, all from the equilibrium residual (see :mod:`vpcontact.s
 With the applied loads they balance: Σ reactions + Σ contact forces + ∫f_0 + ∫f_2 + point loads
 = 0. ``reactions.csv`` has a column per Dirichlet part and component (``<part>_x`` …), the total
 contact force (``contact_x`` …) and, when the scene has several contact parts, each part's
-(``<part>_x`` …, named after its boundary part).
+(``<part>_x`` …, named after its boundary part). When some part has friction, each part's
+normal force and the magnitude of its tangential force follow (``<part>_normal``,
+``<part>_tangential``: :meth:`~vpcontact.solver.problem.QuasistaticProblem.
+normal_and_tangential_forces`).
 When a prescribed displacement or an obstacle's translation drives the run, its size is recorded
 too (the "displacement" column), so that force–displacement curves can be plotted as indentation
 and forming tests are.
@@ -36,6 +39,9 @@ class ForceHistory:
         self.reactions: list[np.ndarray] = []   # (parts, dim) per time
         self.parts: list[np.ndarray] = []       # (contact parts, dim) per time
         self.driver: list[Optional[float]] = []  # the driving displacement, if any
+        #: with friction: each contact part's (normal force, |tangential force|) per time
+        self.split = any(getattr(p.law, "friction", None) is not None for p in problem.contacts)
+        self.components: list[np.ndarray] = []  # (contact parts, 2) per time
 
     def record(self, t: float) -> None:
         """Add the forces of the current state (collective)."""
@@ -44,6 +50,8 @@ class ForceHistory:
         self.reactions.append(reactions)
         self.parts.append(contact)
         self.driver.append(self.problem.driving_displacement())
+        if self.split:
+            self.components.append(self.problem.normal_and_tangential_forces())
 
     def restore(self, arrays: dict) -> None:
         """The records of a checkpoint (:mod:`vpcontact.output.checkpoint`)."""
@@ -52,6 +60,9 @@ class ForceHistory:
         self.parts = list(arrays["contact"])
         self.driver = [float(d) if driven else None
                        for d, driven in zip(arrays["driver"], arrays["driven"])]
+        if self.split:  # (a checkpoint written before these were recorded: unknown)
+            missing = np.full((len(self.times), len(self.contact_names), 2), np.nan)
+            self.components = list(arrays.get("components", missing))
 
     @property
     def contact(self) -> list[np.ndarray]:
@@ -70,6 +81,9 @@ class ForceHistory:
         cols += [f"contact_{a}" for a in axes]
         if self.per_part:
             cols += [f"{name}_{a}" for name in self.contact_names for a in axes]
+        if self.split:
+            cols += [f"{name}_{kind}" for name in self.contact_names
+                     for kind in ("normal", "tangential")]
         return cols
 
     def write_csv(self, path: str | Path) -> None:
@@ -77,10 +91,12 @@ class ForceHistory:
         def write():
             with open(path, "w") as f:
                 f.write(",".join(self._columns()) + "\n")
-                for t, d, r, c, p in zip(self.times, self.driver, self.reactions, self.contact,
-                                         self.parts):
+                split = self.components if self.split else [None] * len(self.times)
+                for t, d, r, c, p, nt in zip(self.times, self.driver, self.reactions,
+                                             self.contact, self.parts, split):
                     values = [f"{t:.10g}"] + ([] if d is None else [f"{d:.10e}"])
                     columns = [r.ravel(), c] + ([p.ravel()] if self.per_part else [])
+                    columns += [] if nt is None else [nt.ravel()]
                     values += [f"{v:.10e}" for v in np.concatenate(columns)]
                     f.write(",".join(values) + "\n")
         on_rank0(self.comm, write)
@@ -94,9 +110,17 @@ class ForceHistory:
             "contact_force_final": self.contact[-1].tolist() if self.contact else None,
             "contact_force": [c.tolist() for c in self.contact],
             "contact_parts": {name: {"final": self.parts[-1][i].tolist() if self.parts else None,
-                                     "history": [p[i].tolist() for p in self.parts]}
+                                     "history": [p[i].tolist() for p in self.parts],
+                                     **(self._split_summary(i) if self.split else {})}
                               for i, name in enumerate(self.contact_names)},
         }
+
+    def _split_summary(self, i: int) -> dict:
+        """Contact part i's normal and tangential force, final and over time (friction)."""
+        history = np.array([c[i] for c in self.components]).reshape(-1, 2)
+        return {f"{kind}_force": {"final": float(history[-1, k]) if len(history) else None,
+                                  "history": history[:, k].tolist()}
+                for k, kind in enumerate(("normal", "tangential"))}
 
     def plot(self, path: str | Path, title: str) -> None:
         """Reactions and contact force against time and, for a driven run, the contact force

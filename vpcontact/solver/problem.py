@@ -598,14 +598,7 @@ class QuasistaticProblem:
         obstacles and foundations, shape (dim,) (zero without contact) — with ``per_part`` each
         contact part's, shape (contact parts, dim) —, from the equilibrium residual
         (σ, ε(v)) - (f, v) (see :mod:`vpcontact.solver.dirichlet`)."""
-        if self._equilibrium_vec is None:
-            self._equilibrium_vec = fem.petsc.create_vector(self._equilibrium_form)
-        vec = self._equilibrium_vec
-        with vec.localForm() as local:
-            local.set(0.0)
-        fem.petsc.assemble_vector(vec, self._equilibrium_form)
-        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        values = vec.array
+        values = self._equilibrium_values()
         reactions = self.dirichlet.reactions(values)
         dim = self.V.dofmap.index_map_bs
         local = np.zeros((len(self.contacts), dim))
@@ -613,6 +606,41 @@ class QuasistaticProblem:
             np.add.at(local[i], part.force_dofs % dim, values[part.force_dofs])
         forces = self.mesh.comm.allreduce(local, op=MPI.SUM)
         return reactions, forces if per_part else forces.sum(axis=0)
+
+    def normal_and_tangential_forces(self) -> np.ndarray:
+        """Each contact part's force split along the body's outward normals ν_i at its nodes,
+        shape (contact parts, 2) (collective): the normal force N = −Σ_i f_i·ν_i (positive
+        where the obstacle presses) and the magnitude of the tangential resultant
+        |Σ_i (f_i − (f_i·ν_i) ν_i)|, f_i the node's share of the part's force (as
+        :meth:`support_forces`). On a flat part they are the normal and tangential components
+        of its force; on a curved one, the resultant of the normal pressures and of the
+        friction forces."""
+        values = self._equilibrium_values()
+        dim = self.V.dofmap.index_map_bs
+        local = np.zeros((len(self.contacts), 1 + dim))
+        for i, part in enumerate(self.contacts):
+            nodes = part.nodes
+            counted = np.zeros(values.size, dtype=bool)
+            counted[part.force_dofs] = True
+            at = nodes.nodes[:, None] * dim + np.arange(dim)
+            f = np.where(counted[at], values[at], 0.0)
+            normal = np.einsum("ij,ij->i", f, nodes.normals)
+            local[i, 0] = 0.0 - normal.sum()  # (0, not -0, where nothing touches)
+            local[i, 1:] = (f - normal[:, None] * nodes.normals).sum(axis=0)
+        total = self.mesh.comm.allreduce(local, op=MPI.SUM)
+        return np.column_stack([total[:, 0], np.linalg.norm(total[:, 1:], axis=1)])
+
+    def _equilibrium_values(self) -> np.ndarray:
+        """The equilibrium residual (σ, ε(v)) − (f, v) at the current state, this rank's
+        entries (collective)."""
+        if self._equilibrium_vec is None:
+            self._equilibrium_vec = fem.petsc.create_vector(self._equilibrium_form)
+        vec = self._equilibrium_vec
+        with vec.localForm() as local:
+            local.set(0.0)
+        fem.petsc.assemble_vector(vec, self._equilibrium_form)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return vec.array
 
     @property
     def contact_names(self) -> list[str]:
