@@ -64,9 +64,6 @@ VARIANTS = {"as_used": (False, False, {}), "cell_weights": (False, False, {}),
             "coarse_lu": (False, False, {"fieldsplit_u_pmg_coarse_pc_type": "lu",
                                          "fieldsplit_u_pmg_coarse_pc_factor_mat_solver_type":
                                          "mumps", "fieldsplit_u_pmg_smooth_stars": "false"}),
-            "coarse_lu_stars": (False, False, {"fieldsplit_u_pmg_coarse_pc_type": "lu",
-                                               "fieldsplit_u_pmg_coarse_pc_factor_mat_solver_type":
-                                               "mumps", "fieldsplit_u_pmg_smooth_stars": "true"}),
             "four_sweeps": (False, False, {"fieldsplit_u_pmg_smooth_ksp_max_it": 4,
                                            "fieldsplit_u_pmg_smooth_stars": "false"}),
             # the P2 level's smoothing chosen (as_used: by the block's size)
@@ -81,6 +78,11 @@ VARIANTS = {"as_used": (False, False, {}), "cell_weights": (False, False, {}),
             # the stars' Schur complement with the cycle's coarse term, the coarse level and
             # the mixed coarse matrix factorized (vpcontact.solver.coarse_schur)
             "coarse_schur": (False, False, {"fieldsplit_u_pmg_smooth_stars": "true"})}
+#: the stars' cycle (and its Ŝ) with its P1 level factorized
+VARIANTS["coarse_lu_stars"] = (False, False, {**VARIANTS["coarse_lu"][2],
+                                              "fieldsplit_u_pmg_smooth_stars": "true"})
+#: variants whose Schur block is the stars' Ŝ (``as_used`` too where the solver has one)
+STAR_SCHUR = ("star_schur_lu", "coarse_schur", "coarse_lu_stars")
 
 
 def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
@@ -88,8 +90,8 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
     """The field split of vpcontact's lagged VI solver on ``matrix``, with the swaps."""
     prefix = solver.prefix + f"parts_{name}_"
     coarse = name == "coarse_schur"
-    star = not formed and (name.startswith("star_schur") or coarse
-                           or name == "coarse_lu_stars" or (name == "as_used" and block.star_schur is not None))
+    star = not formed and (name in STAR_SCHUR
+                           or (name == "as_used" and block.star_schur is not None))
     options = linear_solvers.lagged_options(True)
     if coarse:
         options = linear_solvers.coarse_schur_options(options)

@@ -9,8 +9,8 @@ With the applied loads they balance: Σ reactions + Σ contact forces + ∫f_0 +
 contact force (``contact_x`` …) and, when the scene has several contact parts, each part's
 (``<part>_x`` …, named after its boundary part). When some part has friction, each part's
 normal force and the magnitude of its tangential force follow (``<part>_normal``,
-``<part>_tangential``: :meth:`~vpcontact.solver.problem.QuasistaticProblem.
-normal_and_tangential_forces`).
+``<part>_tangential``: the ``split`` of :meth:`~vpcontact.solver.problem.QuasistaticProblem.
+support_forces`).
 When a prescribed displacement or an obstacle's translation drives the run, its size is recorded
 too (the "displacement" column), so that force–displacement curves can be plotted as indentation
 and forming tests are.
@@ -45,13 +45,13 @@ class ForceHistory:
 
     def record(self, t: float) -> None:
         """Add the forces of the current state (collective)."""
-        reactions, contact = self.problem.support_forces(per_part=True)
+        reactions, contact, *split = self.problem.support_forces(per_part=True,
+                                                                 split=self.split)
         self.times.append(float(t))
         self.reactions.append(reactions)
         self.parts.append(contact)
         self.driver.append(self.problem.driving_displacement())
-        if self.split:
-            self.components.append(self.problem.normal_and_tangential_forces())
+        self.components += split
 
     def restore(self, arrays: dict) -> None:
         """The records of a checkpoint (:mod:`vpcontact.output.checkpoint`)."""

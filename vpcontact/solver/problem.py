@@ -592,12 +592,19 @@ class QuasistaticProblem:
         self.solver.restore(scalars["solver"], {k[7:]: v for k, v in arrays.items()
                                                 if k.startswith("solver_")})
 
-    def support_forces(self, per_part: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    def support_forces(self, per_part: bool = False, split: bool = False) -> tuple:
         """(reactions, contact force) at the current state (collective): the force each
         Dirichlet part exerts on the body, shape (parts, dim), and the total force of the
         obstacles and foundations, shape (dim,) (zero without contact) — with ``per_part`` each
         contact part's, shape (contact parts, dim) —, from the equilibrium residual
-        (σ, ε(v)) - (f, v) (see :mod:`vpcontact.solver.dirichlet`)."""
+        (σ, ε(v)) - (f, v) (see :mod:`vpcontact.solver.dirichlet`).
+
+        With ``split``, a third item: each contact part's force split along the body's outward
+        normals ν_i at its nodes, shape (contact parts, 2): the normal force N = −Σ_i f_i·ν_i
+        (positive where the obstacle presses) and the magnitude of the tangential resultant
+        |Σ_i (f_i − (f_i·ν_i) ν_i)|, f_i the node's share of the part's force. On a flat part
+        they are the normal and tangential components of its force; on a curved one, the
+        resultants of the normal pressures and of the friction forces."""
         values = self._equilibrium_values()
         reactions = self.dirichlet.reactions(values)
         dim = self.V.dofmap.index_map_bs
@@ -605,17 +612,11 @@ class QuasistaticProblem:
         for i, part in enumerate(self.contacts):
             np.add.at(local[i], part.force_dofs % dim, values[part.force_dofs])
         forces = self.mesh.comm.allreduce(local, op=MPI.SUM)
-        return reactions, forces if per_part else forces.sum(axis=0)
+        result = (reactions, forces if per_part else forces.sum(axis=0))
+        return result + (self._normal_and_tangential(values),) if split else result
 
-    def normal_and_tangential_forces(self) -> np.ndarray:
-        """Each contact part's force split along the body's outward normals ν_i at its nodes,
-        shape (contact parts, 2) (collective): the normal force N = −Σ_i f_i·ν_i (positive
-        where the obstacle presses) and the magnitude of the tangential resultant
-        |Σ_i (f_i − (f_i·ν_i) ν_i)|, f_i the node's share of the part's force (as
-        :meth:`support_forces`). On a flat part they are the normal and tangential components
-        of its force; on a curved one, the resultant of the normal pressures and of the
-        friction forces."""
-        values = self._equilibrium_values()
+    def _normal_and_tangential(self, values: np.ndarray) -> np.ndarray:
+        """The ``split`` of :meth:`support_forces` from the equilibrium residual ``values``."""
         dim = self.V.dofmap.index_map_bs
         local = np.zeros((len(self.contacts), 1 + dim))
         for i, part in enumerate(self.contacts):
