@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: MIT
 """BDF2 for the constitutive law (time_scheme="bdf2"): second order in k on the paper's 1-D test
-against its exact solution, where implicit Euler is first order."""
+against its exact solution, where implicit Euler is first order, and on a homogeneous
+plane-strain state (σ33, hidden in the law's state, carried by BDF2 as well)."""
 
 import numpy as np
 import pytest
@@ -78,6 +79,40 @@ def test_bdf2_perzyna_flow_is_stable_and_more_accurate_than_euler():
     err_bdf2 = abs(run(0.05, "bdf2") - reference)
     # measured: Euler 3.4e-5 m, BDF2 2.5e-6 m
     assert np.isfinite(err_bdf2) and err_bdf2 < 0.5 * err_euler, (err_euler, err_bdf2)
+
+
+@pytest.mark.parametrize("formulation,degree", [("displacement", 1), ("mixed", 2)])
+def test_bdf2_is_second_order_in_plane_strain(formulation, degree):
+    """A Perzyna square in plane strain on rollers, ε_xx = 2e-3 (1 − cos πt)/2 (ten times the
+    yield strain) to t = 1: a homogeneous state, so the only error is the time scheme's. The
+    differences of σ_xx and σ33 between successive halvings of k fall at rate 2 (measured
+    2.65 and 2.06; implicit Euler 0.99 and 0.90). BDF2's history w = σ − E ε then holds σ33,
+    whose (E ε)33 = λ tr ε: built from the in-plane state alone it was the wrong shape, and
+    every plane-strain scene with ``scheme = "bdf2"`` failed at its second step."""
+    from test_mixed import _cube, _pushed, stress_at_points
+    from vpcontact.model import Elasticity, Perzyna, PlaneStrain
+    from vpcontact.solver import QuasistaticProblem
+
+    def run(k):
+        msh, tags = _cube(2)
+        law = PlaneStrain(Perzyna(Elasticity("3d_standard", 1000.0, 0.3), sigma_y=0.2,
+                                  mu_star=5.0))
+        strain = lambda t: 1e-3 * (1.0 - np.cos(np.pi * t))  # noqa: E731
+        problem = QuasistaticProblem(msh, tags, law, dirichlet=_pushed(2, [0], strain),
+                                     formulation=formulation, degree=degree, time_scheme="bdf2")
+        for _ in range(round(1.0 / k)):
+            problem.step(k)
+        correction = problem.stress_correction_at_points()
+        s33 = law.out_of_plane_stress()[0] + (0.0 if correction is None else correction[0])
+        return np.array([stress_at_points(problem)[0, 0], s33])
+
+    ks = np.array([0.1, 0.05, 0.025, 0.0125, 0.00625])
+    values = np.array([run(k) for k in ks])
+    assert np.all(np.isfinite(values)) and values[-1, 0] < 0.5 * 1000.0 * 2e-3, values
+    differences = np.abs(np.diff(values, axis=0))
+    for component, name in enumerate(("sigma_xx", "sigma_33")):
+        rate = np.polyfit(np.log(ks[:-1]), np.log(differences[:, component]), 1)[0]
+        assert 1.7 <= rate <= 3.2, f"{name}: differences {differences[:, component]}, rate {rate:.2f}"
 
 
 def test_scene_time_scheme(tmp_path, capsys):

@@ -270,15 +270,33 @@ class PlaneStrain:
         """The 3-D law's limit (its stiffest mode, the hydrostatic one, exists in plane strain)."""
         return self.law.explicit_step_limit()
 
+    def full_history(self, stress: np.ndarray, strain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The committed in-plane (N, 3) stress and strain as the 3-D law's (N, 6) arrays: σ33
+        from this wrapper's committed state, ε33 = 0. A history built from the state (BDF2's
+        w = σ − E ε, :mod:`vpcontact.solver.bdf2`) needs σ33 too: (E ε)33 = λ tr ε ≠ 0."""
+        n = stress.shape[0]
+        if self._s33_old.shape != (n,):
+            self._s33_old, self._s33 = np.zeros(n), np.zeros(n)
+        ip = self._IN_PLANE
+        s, e = np.zeros((n, 6)), np.zeros((n, 6))
+        s[:, ip], s[:, 2] = stress, self._s33_old
+        e[:, ip] = strain
+        return s, e
+
     def update(self, stress_old, strain_old, strain_new, dt, stress_out, tangent_out) -> None:
-        """As the 3-D law's update, for in-plane (N, 3) Mandel arrays."""
+        """As the 3-D law's update, for in-plane (N, 3) Mandel arrays. The old stress and strain
+        may instead be (N, 6) 3-D arrays (a history from :meth:`full_history`); σ33_old is then
+        theirs, not the committed one."""
         n = stress_old.shape[0]
         if self._s33_old.shape != (n,):
             self._s33_old, self._s33 = np.zeros(n), np.zeros(n)
         ip = self._IN_PLANE
-        s_old, e_old, e_new = np.zeros((n, 6)), np.zeros((n, 6)), np.zeros((n, 6))
-        s_old[:, ip], s_old[:, 2] = stress_old, self._s33_old
-        e_old[:, ip], e_new[:, ip] = strain_old, strain_new
+        if stress_old.shape[1] == 6:
+            s_old, e_old = stress_old, strain_old
+        else:
+            s_old, e_old = self.full_history(stress_old, strain_old)
+        e_new = np.zeros((n, 6))
+        e_new[:, ip] = strain_new
         s_new = np.empty((n, 6))
         t_new = None if tangent_out is None else np.empty((n, 6, 6))
         self.law.update(s_old, e_old, e_new, dt, s_new, t_new)

@@ -38,6 +38,8 @@ class Bdf2:
 
     def __init__(self, law):
         self.E = law.elasticity.matrix()
+        # a law whose state hides components (plane strain's σ33) gives its full arrays
+        self._full_history = getattr(law, "full_history", None)
         self.w_prev: Optional[np.ndarray] = None  # w_{n−2}: w before the last accepted step
         self.dt_prev = 0.0
         self.active = False
@@ -50,7 +52,7 @@ class Bdf2:
             return dt
         omega = dt / self.dt_prev
         a1, a2 = (1 + omega) ** 2 / (1 + 2 * omega), -omega**2 / (1 + 2 * omega)
-        w_now = state.view(state.stress_old) - state.view(state.strain_old) @ self.E
+        w_now = self._w(state)
         history = a1 * w_now + a2 * self.w_prev
         self._inputs = (history, np.zeros_like(history), (1 + omega) / (1 + 2 * omega) * dt)
         return self._inputs[2]
@@ -60,5 +62,12 @@ class Bdf2:
 
     def accept(self, state, dt: float) -> None:
         """Keep w_{n−1} (the committed state before this step) and k_n for the next step."""
-        self.w_prev = state.view(state.stress_old) - state.view(state.strain_old) @ self.E
+        self.w_prev = self._w(state)
         self.dt_prev = dt
+
+    def _w(self, state) -> np.ndarray:
+        """w = σ − E ε of the committed state, in the law's own (full) components."""
+        stress, strain = state.view(state.stress_old), state.view(state.strain_old)
+        if self._full_history is not None:
+            stress, strain = self._full_history(stress, strain)
+        return stress - strain @ self.E
