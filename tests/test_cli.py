@@ -211,6 +211,33 @@ def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, cap
         assert "the simulation failed" in capsys.readouterr().err
 
 
+def test_an_internal_error_is_one_line_and_exit_3_unless_a_traceback_is_asked(
+        shared_tmp_path, capsys, monkeypatch):
+    """A bug (here an exception planted in the second step) is not a bad scene nor a failed
+    step: one line naming it, exit 3, the completed step kept; ``--traceback`` re-raises it."""
+    from vpcontact.solver import QuasistaticProblem
+
+    original = QuasistaticProblem.step
+
+    def step(self, dt, tolerance=None):
+        if self.step_index == 1:
+            raise ZeroDivisionError("planted")
+        return original(self, dt, tolerance)
+
+    monkeypatch.setattr(QuasistaticProblem, "step", step)
+    path = _small("signorini_2d", shared_tmp_path, "[4, 4]", 1.0, 0.25)
+    out = shared_tmp_path / "bug"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == cli.INTERNAL_ERROR
+    summary = _summary(out)
+    assert summary["completed"] is False and summary["steps"] == 1
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err
+        assert "internal error" in err and "ZeroDivisionError: planted" in err, err
+        assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    with pytest.raises(ZeroDivisionError, match="planted"):
+        cli.main(["--traceback", "run", str(path), "--out", str(out), "--quiet"])
+
+
 def test_newton_that_diverges_to_nan_is_a_failed_step_not_a_traceback(shared_tmp_path, capsys):
     """Stiff units (E = 1e9, σ_Y = 1) with the mixed formulation: the first step's Newton
     iterate becomes non-finite; that is a failed step (rolled back, cut, and finally a clean

@@ -13,7 +13,8 @@
   Markdown and PNG into ``--out`` (default ``output/<scene name>/study``).
 
 Exit status: 0 on success, 2 for a bad scene or command line (nothing is written), 1 when the
-simulation fails (the completed steps are kept and ``summary.json`` says ``"completed": false``).
+simulation fails (the completed steps are kept and ``summary.json`` says ``"completed": false``),
+3 for an internal error (a bug; one line, or the traceback with ``--traceback``).
 """
 
 from __future__ import annotations
@@ -28,6 +29,10 @@ from mpi4py import MPI
 
 from vpcontact.errors import (ConvergenceError, InputError, Interrupted, NonFiniteStateError,
                               OutputError, StepRejected, VpcontactError)
+
+
+#: exit status of an unexpected exception (a bug in vpcontact, not a bad scene)
+INTERNAL_ERROR = 3
 
 
 def main(argv: Optional[list] = None) -> int:
@@ -57,6 +62,14 @@ def main(argv: Optional[list] = None) -> int:
     except VpcontactError as err:  # bad scene or arguments: a clear message, nothing written
         _error(comm, str(err))
         return 2
+    except Exception as err:  # a bug in vpcontact, not in the scene: one line, unless asked
+        if args.traceback:
+            raise
+        _error(comm, f"internal error, a bug in vpcontact rather than in the scene: "
+                     f"{type(err).__name__}: {err}. The completed steps were kept "
+                     "(summary.json says \"completed\": false). Please report it with the "
+                     "scene file; `vpcontact --traceback ...` shows where it happened.")
+        return INTERNAL_ERROR
 
 
 def configure_logging(verbose: bool = False) -> None:
@@ -111,6 +124,8 @@ def scene_demo_main(run, description: str, out: str, cells: str, argv=None) -> i
 
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="vpcontact", description=__doc__.splitlines()[0])
+    parser.add_argument("--traceback", action="store_true",
+                        help="on an internal error (a bug), show Python's traceback")
     verbose = argparse.ArgumentParser(add_help=False)
     verbose.add_argument("-v", "--verbose", action="store_true",
                          help="also show the form compiler's messages (JIT builds)")
