@@ -211,6 +211,7 @@ def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, cap
         assert "the simulation failed" in capsys.readouterr().err
 
 
+@pytest.mark.serial  # on several ranks the run ends the MPI job instead (test_mpi_abort.py)
 def test_an_internal_error_is_one_line_and_exit_3_unless_a_traceback_is_asked(
         shared_tmp_path, capsys, monkeypatch):
     """A bug (here an exception planted in the second step) is not a bad scene nor a failed

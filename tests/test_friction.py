@@ -1031,3 +1031,52 @@ def test_a_vi_step_stuck_at_round_off_is_accepted():
     assert len(steps) == 8, [s.time for s in steps]  # no step was cut
     assert max(s.newton_iterations for s in steps) <= 8, [s.newton_iterations for s in steps]
     assert problem.solver.total_iterations == sum(s.newton_iterations for s in steps)
+
+
+def test_friction_on_a_part_that_some_processes_do_not_hold(shared_tmp_path):
+    """A cylinder pressed onto a small contact part at the block's corner and moved along it,
+    with Coulomb friction: on 2 ranks the part lies on one process only. The other one built its nodal
+    friction's frames from no nodes with the wrong shape, raised in the first step's obstacle
+    motion and left the first waiting in a collective call: the run hung. Serially it runs as
+    before; on 2 ranks it must too, with a process that holds none of the part's nodes."""
+    from vpcontact import scene as scenes
+    from vpcontact.scene import build
+
+    text = """
+name = "corner_friction"
+[mesh]
+type = "rectangle"
+lower = [0.0, -1.0]
+upper = [1.0, 0.0]
+cells = [8, 8]
+[boundary.bottom]
+kind = "clamped"
+plane = { axis = "y", value = -1.0 }
+[boundary.top]
+kind = "contact"
+box = { lower = [0.0, 0.0], upper = [0.2, 0.0] }
+[material]
+E = 1000.0
+nu = 0.3
+[law]
+type = "elastic"
+[contact]
+type = "signorini"
+boundary = "top"
+obstacle = { shape = "cylinder", center = [0.0, 0.5], radius = 0.5 }
+motion = ["0.01*t", "-0.02*t"]
+friction = { type = "coulomb", coefficient = 0.3 }
+[time]
+T = 0.2
+k = 0.05
+"""
+    path = write_shared(shared_tmp_path / "corner_friction.toml", text)
+    problem = build(scenes.load(path)).problem
+    held = len(problem.contacts[0].nodes.nodes)
+    comm = MPI.COMM_WORLD
+    if comm.size > 1:
+        assert comm.allreduce(int(held == 0), op=MPI.SUM) >= 1, "a process must hold none"
+    for _ in advance(problem, 0.2, StepControl(0.05)):
+        pass
+    force = problem.support_forces(per_part=True)[1][0]
+    assert np.all(np.isfinite(force)) and abs(force[1]) > 0.0, force

@@ -2,7 +2,8 @@
 """A test that fails on one MPI rank only ends the 2-rank test run soon (after the conftest's
 agreement timeout), with a non-zero exit and the failure's report, instead of leaving the other
 rank waiting in its next collective call; a test that fails on every rank does not end the run:
-the later tests still run, so one run reports every failure."""
+the later tests still run, so one run reports every failure. Likewise a bug that raises on one
+rank only in a command-line run ends the MPI job with its message and exit status 3."""
 
 import os
 import shutil
@@ -71,3 +72,41 @@ def test_a_failure_on_every_rank_lets_the_later_tests_run(tmp_path):
     assert output.count("test_fails_on_every_rank failed (call)") == 2, output
     assert "aborting" not in output, output
     assert output.count("1 failed, 1 passed") == 2, output
+
+
+_PLANTED = textwrap.dedent("""
+    import sys
+    from mpi4py import MPI
+    from vpcontact import cli
+    from vpcontact.solver import QuasistaticProblem
+
+    original = QuasistaticProblem.step
+
+    def step(self, dt, tolerance=None):
+        if self.step_index == 1 and MPI.COMM_WORLD.rank == 1:
+            raise ZeroDivisionError("planted on rank 1")
+        return original(self, dt, tolerance)
+
+    QuasistaticProblem.step = step
+    sys.exit(cli.main(["run", "signorini_2d", "--out", sys.argv[1], "--quiet"]))
+""")
+
+
+def test_a_bug_on_one_rank_of_a_run_ends_the_job_with_its_message(tmp_path):
+    """The other rank would wait for ever in the outputs' collective calls (as a bug in the
+    nodal friction's set-up on a process without contact nodes once did): the run aborts."""
+    mpirun = shutil.which("mpirun")
+    assert mpirun is not None, "mpirun (Open MPI) is required; run scripts/setup.sh"
+    (tmp_path / "planted.py").write_text(_PLANTED)
+    env = {k: v for k, v in os.environ.items() if not k.startswith(("OMPI_", "PMIX_", "OPAL_"))}
+    env["OMPI_MCA_rmaps_base_oversubscribe"] = "1"
+    root = ["--allow-run-as-root"] if os.geteuid() == 0 else []
+    start = time.perf_counter()
+    done = subprocess.run([mpirun, *root, "-n", "2", sys.executable, str(tmp_path / "planted.py"),
+                           str(tmp_path / "out")], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, timeout=300)
+    output = done.stdout + done.stderr
+    assert done.returncode != 0, output
+    assert "internal error on rank 1" in output and "ZeroDivisionError: planted on rank 1" in output, output
+    assert "Traceback" not in output, output
+    assert time.perf_counter() - start < 240, output

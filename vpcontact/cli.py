@@ -27,12 +27,8 @@ from typing import Optional
 
 from mpi4py import MPI
 
-from vpcontact.errors import (ConvergenceError, InputError, Interrupted, NonFiniteStateError,
-                              OutputError, StepRejected, VpcontactError)
-
-
-#: exit status of an unexpected exception (a bug in vpcontact, not a bad scene)
-INTERNAL_ERROR = 3
+from vpcontact.errors import (INTERNAL_ERROR, ConvergenceError, InputError, Interrupted,
+                              NonFiniteStateError, OutputError, StepRejected, VpcontactError)
 
 
 def main(argv: Optional[list] = None) -> int:

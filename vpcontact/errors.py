@@ -8,6 +8,10 @@ bad input from a solver that did not converge.
 from __future__ import annotations
 
 
+#: exit status of an unexpected exception: a bug in vpcontact, not a bad scene nor a failed step
+INTERNAL_ERROR = 3
+
+
 class VpcontactError(Exception):
     """Base class of all errors raised on purpose by vpcontact."""
 

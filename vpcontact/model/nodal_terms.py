@@ -60,7 +60,9 @@ class NodalTerm:
         self.scale = 1.0
         blocks = cd.frames.blocks
         #: (n, bs, bs − 1): the frame's tangential columns τ at each node
-        self.frame_tangents = np.array([blocks[i][:, o] for i, o in enumerate(others)])
+        # (shaped even where this process holds none of the part's nodes)
+        self.frame_tangents = np.array([blocks[i][:, o] for i, o in enumerate(others)],
+                                       dtype=np.float64).reshape(len(cd.nodes), bs, bs - 1)
         self._lam = np.zeros(len(self.slots))            # λ at the last residual
         self._at: Optional[np.ndarray] = None             # ... and its iterate
 

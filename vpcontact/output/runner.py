@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Optional
 
 from vpcontact.output.fields import CellStress, ContactHistory, XdmfSeries
-from vpcontact.errors import OutputError, VpcontactError
+from vpcontact.errors import INTERNAL_ERROR, OutputError, VpcontactError
 from vpcontact.output.checkpoint import Checkpointer, Restart, restore_control
 from vpcontact.output.forces import ForceHistory
 
@@ -74,6 +74,10 @@ class RunOptions:
     verbose: bool = True
     max_cuts: int = 12
     tolerance: Optional[float] = None
+    #: on several ranks, end the MPI job at an unexpected exception (a bug) instead of raising
+    #: it: it may have been raised on some ranks only, and the outputs' collective calls would
+    #: then wait for the others for ever (the command line's runs)
+    abort_on_bug: bool = False
 
 
 @dataclass
@@ -187,6 +191,10 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                 break
         else:
             record.completed = not interrupted
+    except Exception as err:
+        if options.abort_on_bug and comm.size > 1 and not isinstance(err, VpcontactError):
+            _abort(comm, err)
+        raise
     finally:
         record.cuts = list(control.cuts)
         with _timed(record, out):
@@ -201,6 +209,17 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         record.wall_time = _time.perf_counter() - start
     record.interrupted = interrupted
     return record, history, cells
+
+
+def _abort(comm, err: Exception) -> None:
+    """End every rank's process: ``err``, unexpected, may be this rank's alone (the others then
+    wait in a collective call). The one place in the library that writes to stderr itself: the
+    process ends here, before the command line could."""
+    import sys
+    print(f"error: internal error on rank {comm.rank}, a bug in vpcontact rather than in the "
+          f"scene: {type(err).__name__}: {err}. Aborting the MPI job (the run's outputs are "
+          "incomplete); please report it with the scene file.", file=sys.stderr, flush=True)
+    comm.Abort(INTERNAL_ERROR)
 
 
 def _restore_record(record: RunRecord, saved: dict) -> None:

@@ -92,7 +92,8 @@ class Session:
             options = runner.RunOptions(
                 name=scene.name, xdmf=scene.output.xdmf, xdmf_every=scene.output.every,
                 csv_name="contact.csv" if scene.output.contact_csv else None, verbose=False,
-                max_cuts=scene.time.max_cuts, tolerance=scene.time.tolerance)
+                max_cuts=scene.time.max_cuts, tolerance=scene.time.tolerance,
+                abort_on_bug=True)
             parts = runner.RunParts(
                 history=history, forces=self.forces,
                 xdmf_extra=tuple(self._pressure_field(history)), progress=self._progress,
