@@ -1080,3 +1080,59 @@ k = 0.05
         pass
     force = problem.support_forces(per_part=True)[1][0]
     assert np.all(np.isfinite(force)) and abs(force[1]) > 0.0, force
+
+
+def test_a_run_resumed_on_a_moving_obstacle_slips_from_where_it_stopped(shared_tmp_path):
+    """A cylinder pressed into the block and then moved along it, 𝔣 = 1 (the nodes under it
+    partly stick), checkpointed at t = 0.4: the run resumed there gives the uninterrupted
+    run's forces and slips. The restored part had forgotten the time of its last step, and
+    the first resumed step took the cylinder's whole motion since t = 0 as slip: the
+    tangential force 44 % off at the end."""
+    text = """
+name = "moving_cylinder"
+[mesh]
+type = "rectangle"
+lower = [-1.0, -0.5]
+upper = [1.0, 0.0]
+cells = [16, 4]
+[boundary.bottom]
+kind = "clamped"
+plane = { axis = "y", value = -0.5 }
+[boundary.top]
+kind = "contact"
+box = { lower = [-0.95, 0.0], upper = [0.95, 0.0] }
+[material]
+E = 1000.0
+nu = 0.3
+plane = "strain"
+[law]
+type = "elastic"
+[contact]
+type = "signorini"
+boundary = "top"
+obstacle = { shape = "cylinder", center = [0.0, 0.5], radius = 0.5 }
+motion = ["0.02*max(t - 0.2, 0)", "-0.01*min(t/0.2, 1)"]
+friction = { type = "coulomb", coefficient = 1.0 }
+[time]
+T = 0.6
+k = 0.05
+[output]
+xdmf = false
+figures = false
+checkpoint_every = 8
+"""
+    scene = write_shared(shared_tmp_path / "moving_cylinder.toml", text)
+    out = shared_tmp_path / "moving_cylinder"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    reference = _forces(out)
+    contact = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
+    assert np.abs(reference["contact_x"][-1]) > 0.1 * np.abs(reference["contact_y"][-1])
+    assert cli.main(["run", str(scene), "--out", str(out), "--resume", "--quiet"]) == 0
+    resumed = _forces(out)
+    assert json.loads((out / "summary.json").read_text())["resumed_from"]["time"] == \
+        pytest.approx(0.4)
+    for key in ("contact_x", "contact_y"):
+        scale = np.abs(reference[key]).max()
+        assert np.allclose(resumed[key], reference[key], rtol=0, atol=1e-9 * scale), key
+    again = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
+    assert np.allclose(again, contact, rtol=1e-9, atol=1e-12)

@@ -579,7 +579,8 @@ class SignoriniPart:
 
     def restore(self, state: dict, time: float, arrays: Optional[dict] = None) -> None:
         """Continue from :meth:`state` (and :meth:`arrays`) at ``time``."""
-        self.update(time)
+        self._time = time  # the last accepted step's: the next step's slip is the obstacle's
+        self.update(time)  # motion from there (from t = 0 it was, 44 % off in the force)
         if self.friction is not None:
             self.friction.restore(arrays or {})
 
