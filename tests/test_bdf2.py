@@ -139,3 +139,17 @@ def test_scene_time_scheme(tmp_path, capsys):
     assert model.problem.time_scheme == "bdf2"
     model.problem.solver.destroy()
     assert 'scheme = "bdf2"' in scenes.load(implicit).to_toml()
+
+
+def test_bdf2_on_an_elastic_body_is_euler():
+    """An elastic law has no rate (G = 0): BDF2 is exact and the same as Euler, so the scene's
+    ``scheme = "bdf2"`` runs (it was refused naming the law's internal class and an explicit
+    scheme the scene never set)."""
+    from vpcontact.scene import build, loads_text
+    from vpcontact import scene as scenes
+
+    text = scenes.bundled()["elastic_2d"].read_text().replace("k = 0.25", 'k = 0.25\nscheme = "bdf2"')
+    assert 'scheme = "bdf2"' in text
+    problem = build(loads_text(text)).problem
+    assert problem.time_scheme == "euler"
+    list(advance(problem, 1.0, StepControl(0.25)))

@@ -211,6 +211,19 @@ def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, cap
         assert "the simulation failed" in capsys.readouterr().err
 
 
+def test_a_quadratic_bar_writes_its_contact_history(shared_tmp_path):
+    """The paper's 1-D bar with P2 displacements: its contact pressure, written as a P1 field,
+    is gathered from the vertices of the one-component vector P2 space (whose coordinates
+    dolfinx will not tabulate: the run used to stop with an internal error)."""
+    path = _small("normal_compliance_1d", shared_tmp_path, "[20]", 1.0, 0.05,
+                  extra="\n[discretization]\ndegree = 2\n")
+    out = shared_tmp_path / "bar_p2"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    values = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1, ndmin=2)
+    assert np.isfinite(values).all() and len(values) == 21  # t = 0 and every step
+    assert values[-1, 7] < 0.0, values[-1]  # in contact at the end (from t = ln 2): pressed
+
+
 @pytest.mark.serial  # on several ranks the run ends the MPI job instead (test_mpi_abort.py)
 def test_an_internal_error_is_one_line_and_exit_3_unless_a_traceback_is_asked(
         shared_tmp_path, capsys, monkeypatch):

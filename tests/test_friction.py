@@ -1136,3 +1136,41 @@ checkpoint_every = 8
         assert np.allclose(resumed[key], reference[key], rtol=0, atol=1e-9 * scale), key
     again = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
     assert np.allclose(again, contact, rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("floor", ["rigid", "compliant"])
+def test_the_dragged_block_on_quadrilaterals_slides_with_the_coulomb_ratio(shared_tmp_path,
+                                                                            floor):
+    """The dragged block meshed by quadrilaterals: the stick stiffness's facet size comes from
+    the facet Jacobian there (FFCx has no FacetArea on them: the run stopped with an internal
+    error), and while the block slides its tangential force is 0.3 × the normal one."""
+    coulomb = 'friction = { type = "coulomb", coefficient = 0.3 }'
+    text = (_signorini_dragged(PLANE_FLOOR) if floor == "rigid"
+            else DRAGGED.replace("FRICTION", coulomb))
+    text = text.replace("cells = [16, 4]\n", 'cells = [16, 4]\ncell_type = "quadrilateral"\n')
+    scene = write_shared(shared_tmp_path / f"quads_{floor}.toml", text)
+    out = shared_tmp_path / f"quads_{floor}"
+    assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    f = _forces(out)
+    sliding = f["t"] >= 0.7
+    ratio = -f["contact_x"][sliding] / f["contact_y"][sliding]
+    assert np.allclose(ratio, 0.3, rtol=1e-8), ratio
+
+
+def test_facet_sizes_on_quadrilaterals_and_hexahedra():
+    """h_F from the facet Jacobian where FacetArea is missing: the edge's length, the square
+    root of the face's area, on boxes of unequal spacing (∫ h_F over a face = area × h_F)."""
+    from dolfinx import fem
+    from vpcontact.model.nodal_areas import facet_size
+    comm = MPI.COMM_WORLD
+    square = dmesh.create_rectangle(comm, [np.zeros(2), np.array([2.0, 1.0])], [4, 5],
+                                    dmesh.CellType.quadrilateral)
+    cube = dmesh.create_box(comm, [np.zeros(3), np.array([2.0, 1.0, 1.0])], [4, 2, 5],
+                            dmesh.CellType.hexahedron)
+    # (faces: measure × facet size; spacings 0.5 × 0.2 and 0.5 × 0.5 × 0.2)
+    for msh, expected in ((square, 2 * 2.0 * 0.5 + 2 * 1.0 * 0.2),
+                          (cube, 2 * 1.0 * np.sqrt(0.5 * 0.2) + 2 * 2.0 * np.sqrt(0.5 * 0.2)
+                           + 2 * 2.0 * np.sqrt(0.5 * 0.5))):
+        value = comm.allreduce(fem.assemble_scalar(fem.form(facet_size(msh) * ufl.ds(domain=msh))),
+                               op=MPI.SUM)
+        assert value == pytest.approx(expected, rel=1e-12)

@@ -215,6 +215,29 @@ def test_a_scene_runs_with_the_linearized_scheme_and_show_writes_it_back(shared_
     assert max(summary["newton_iterations"]) <= 6, summary["newton_iterations"]
 
 
+def test_a_large_linearized_step_is_one_newton_iteration():
+    """The bundled cantilever with Perzyna's law (σ_Y far above its stresses) integrated by the
+    linearized scheme, its end load ×100: each step is one linear problem, solved in one
+    Newton iteration, and the deflection (1.6 % of the length) is the elastic law's. bt, the
+    scheme's line search, used to cut every Newton step longer than 1e-4 of the extent (PETSc's
+    maxstep, 1e8 in SNES's scaled unknowns): 50 iterations and DIVERGED_MAX_IT."""
+    from vpcontact import scene as scenes
+
+    text = scenes.bundled()["elastic_2d"].read_text()
+    text = re.sub(r'(?m)^traction = .*$', 'traction = [0.0, "-100*t"]', text)
+    elastic = build(loads_text(text)).problem
+    viscoplastic = build(loads_text(text.replace('type = "elastic"', (
+        'type = "perzyna"\nsigma_y = 1e4\nmu_star = 1.0\nscheme = "linearized"'))))
+    problem = viscoplastic.problem
+    reports = list(advance(problem, 1.0, StepControl(0.25)))
+    list(advance(elastic, 1.0, StepControl(0.25)))
+    assert [r.newton_iterations for r in reports] == [1, 1, 1, 1]
+    deflection = MPI.COMM_WORLD.allreduce(float(np.abs(elastic.u.x.array).max(initial=0.0)),
+                                          op=MPI.MAX)
+    assert deflection > 1e-2 * 4.0
+    assert np.abs(problem.u.x.array - elastic.u.x.array).max() <= 1e-8 * deflection
+
+
 def test_bdf2_refuses_the_linearized_scheme(shared_tmp_path, capsys):
     path = write_shared(shared_tmp_path / "bdf.toml", PLATE.replace("TIME", 'scheme = "bdf2"'))
     assert cli.main(["run", str(path), "--out", str(shared_tmp_path / "bdf"), "--quiet"]) == 2

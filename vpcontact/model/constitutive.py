@@ -138,6 +138,11 @@ class LinearRate:
         """G has no volumetric part, so the mean stress stays K tr ε (elasticity: a = b = 0)."""
         return self.a == 0.0 and self.b == 0.0
 
+    @property
+    def rate_free(self) -> bool:
+        """G = 0 (elasticity): every time scheme gives σ = σ_0 + E(ε − ε_0) exactly."""
+        return self.a == 0.0 and self.b == 0.0
+
     def explicit_step_limit(self) -> float:
         """Largest stable explicit step: σ is multiplied by (1 + k a) per step, so k < 2/|a|
         for a < 0 (inf for the implicit scheme or a ≥ 0, where nothing oscillates)."""
@@ -265,6 +270,10 @@ class PlaneStrain:
     @property
     def plastic(self) -> bool:
         return self.law.plastic
+
+    @property
+    def rate_free(self) -> bool:
+        return getattr(self.law, "rate_free", False)
 
     def explicit_step_limit(self) -> float:
         """The 3-D law's limit (its stiffest mode, the hydrostatic one, exists in plane strain)."""

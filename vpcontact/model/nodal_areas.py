@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 import ufl
+from ufl.geometry import FacetJacobianDeterminant
 from dolfinx import fem
 import dolfinx.fem.petsc  # noqa: F401  (fem.petsc)
 from mpi4py import MPI
@@ -80,7 +81,14 @@ def facet_size(mesh):
     """A facet's size h_F (UFL): its length in 2-D, the square root of its area in 3-D, 1 for
     the point facets of 1-D."""
     fdim = mesh.topology.dim - 1
-    return ufl.FacetArea(mesh) ** (1.0 / fdim) if fdim > 0 else fem.Constant(mesh, 1.0)
+    if fdim == 0:
+        return fem.Constant(mesh, 1.0)
+    if mesh.ufl_cell().is_simplex():
+        return ufl.FacetArea(mesh) ** (1.0 / fdim)
+    # FFCx has no FacetArea on quadrilaterals and hexahedra: there the facet Jacobian's
+    # determinant is the size of a straight edge or of a parallelogram face (their reference
+    # facets, [0, 1] and [0, 1]², measure 1)
+    return abs(FacetJacobianDeterminant(mesh)) ** (1.0 / fdim)
 
 
 def facet_sizes(V: fem.FunctionSpace, facet_tags, tag: int):

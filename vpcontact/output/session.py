@@ -177,7 +177,9 @@ class Session:
         nodal = field
         if V.ufl_element().degree() != 1:
             scalar, to_parent = V.sub(0).collapse()
-            of_node = np.empty(len(V.tabulate_dof_coordinates()), dtype=np.int32)
+            index_map = V.dofmap.index_map  # (nodes, ghosts included; a 1-D body's
+            # one-component vector space cannot tabulate its coordinates)
+            of_node = np.empty(index_map.size_local + index_map.num_ghosts, dtype=np.int32)
             of_node[np.asarray(to_parent) // bs] = np.arange(len(to_parent), dtype=np.int32)
             nodes = [of_node[n] for n in nodes]
             nodal = fem.Function(scalar)

@@ -12,13 +12,17 @@ from vpcontact.errors import InputError
 
 
 def check_time_scheme(time_scheme: str, law) -> str:
+    """The time scheme the law is integrated with: ``time_scheme``, except that an elastic law
+    (no rate: G = 0) is exact in either and takes Euler's."""
     if time_scheme not in ("euler", "bdf2"):
         raise InputError(f"time_scheme must be 'euler' or 'bdf2', got {time_scheme!r}",
                          key="time.scheme")
+    if time_scheme == "bdf2" and getattr(law, "rate_free", False):
+        return "euler"
     if time_scheme == "bdf2" and (getattr(law, "scheme", None) != "implicit"
                                   or not hasattr(law, "elasticity")):
-        raise InputError("time scheme 'bdf2' needs an implicit law (scheme 'implicit') with its "
-                         f"elasticity; got {type(law).__name__} with scheme "
+        raise InputError("time scheme 'bdf2' needs an implicit law ([law] scheme = "
+                         f"\"implicit\"); this one's scheme is "
                          f"{getattr(law, 'scheme', None)!r}", key="time.scheme")
     return time_scheme
 

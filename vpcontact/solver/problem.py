@@ -241,6 +241,10 @@ class QuasistaticProblem:
         extent = mesh_extent(mesh)
         scale = 2.0 ** (np.floor(np.log2(extent)) - 40)
         self._extent = extent
+        # A line search's longest step (bt's; PETSc's default 1e8) is in these scaled unknowns:
+        # 1e8 is 1e-4 of the extent, and bt cut every longer Newton step to it (the linearized
+        # scheme on a cantilever deflecting by 1e-2 of its length: DIVERGED_MAX_IT). Ten extents.
+        options = {"snes_linesearch_maxstep": 10.0 * extent / scale, **options}
         self._point_loads = [PointDofs(self.V, p) for p in loads.points]
         # Only what is called for: a constitutive update linear in ε with no compliance term
         # has a Jacobian that changes with the step size only; it is factorized once per size.
