@@ -1033,6 +1033,41 @@ def test_a_vi_step_stuck_at_round_off_is_accepted():
     assert problem.solver.total_iterations == sum(s.newton_iterations for s in steps)
 
 
+def _cylinder_on_a_block(name, lower, upper, cells, box, motion, coefficient, time,
+                         plane_strain=False) -> str:
+    """An elastic block clamped at its bottom, a rigid cylinder (radius 0.5, centre (0, 0.5))
+    moved by ``motion`` onto the part ``box`` of its top, Coulomb friction ``coefficient``;
+    ``time`` holds the [time] entries (and any table after them)."""
+    bottom = lower.strip("[]").split(",")[1].strip()
+    plane = 'plane = "strain"\n' if plane_strain else ""
+    return f"""
+name = "{name}"
+[mesh]
+type = "rectangle"
+lower = {lower}
+upper = {upper}
+cells = {cells}
+[boundary.bottom]
+kind = "clamped"
+plane = {{ axis = "y", value = {bottom} }}
+[boundary.top]
+kind = "contact"
+box = {{ lower = {box} }}
+[material]
+E = 1000.0
+nu = 0.3
+{plane}[law]
+type = "elastic"
+[contact]
+type = "signorini"
+boundary = "top"
+obstacle = {{ shape = "cylinder", center = [0.0, 0.5], radius = 0.5 }}
+motion = {motion}
+friction = {{ type = "coulomb", coefficient = {coefficient} }}
+[time]
+{time}"""
+
+
 def test_friction_on_a_part_that_some_processes_do_not_hold(shared_tmp_path):
     """A cylinder pressed onto a small contact part at the block's corner and moved along it,
     with Coulomb friction: on 2 ranks the part lies on one process only. The other one built its nodal
@@ -1042,34 +1077,9 @@ def test_friction_on_a_part_that_some_processes_do_not_hold(shared_tmp_path):
     from vpcontact import scene as scenes
     from vpcontact.scene import build
 
-    text = """
-name = "corner_friction"
-[mesh]
-type = "rectangle"
-lower = [0.0, -1.0]
-upper = [1.0, 0.0]
-cells = [8, 8]
-[boundary.bottom]
-kind = "clamped"
-plane = { axis = "y", value = -1.0 }
-[boundary.top]
-kind = "contact"
-box = { lower = [0.0, 0.0], upper = [0.2, 0.0] }
-[material]
-E = 1000.0
-nu = 0.3
-[law]
-type = "elastic"
-[contact]
-type = "signorini"
-boundary = "top"
-obstacle = { shape = "cylinder", center = [0.0, 0.5], radius = 0.5 }
-motion = ["0.01*t", "-0.02*t"]
-friction = { type = "coulomb", coefficient = 0.3 }
-[time]
-T = 0.2
-k = 0.05
-"""
+    text = _cylinder_on_a_block("corner_friction", "[0.0, -1.0]", "[1.0, 0.0]", "[8, 8]",
+                                "[0.0, 0.0], upper = [0.2, 0.0]", '["0.01*t", "-0.02*t"]',
+                                0.3, "T = 0.2\nk = 0.05\n")
     path = write_shared(shared_tmp_path / "corner_friction.toml", text)
     problem = build(scenes.load(path)).problem
     held = len(problem.contacts[0].nodes.nodes)
@@ -1088,39 +1098,11 @@ def test_a_run_resumed_on_a_moving_obstacle_slips_from_where_it_stopped(shared_t
     run's forces and slips. The restored part had forgotten the time of its last step, and
     the first resumed step took the cylinder's whole motion since t = 0 as slip: the
     tangential force 44 % off at the end."""
-    text = """
-name = "moving_cylinder"
-[mesh]
-type = "rectangle"
-lower = [-1.0, -0.5]
-upper = [1.0, 0.0]
-cells = [16, 4]
-[boundary.bottom]
-kind = "clamped"
-plane = { axis = "y", value = -0.5 }
-[boundary.top]
-kind = "contact"
-box = { lower = [-0.95, 0.0], upper = [0.95, 0.0] }
-[material]
-E = 1000.0
-nu = 0.3
-plane = "strain"
-[law]
-type = "elastic"
-[contact]
-type = "signorini"
-boundary = "top"
-obstacle = { shape = "cylinder", center = [0.0, 0.5], radius = 0.5 }
-motion = ["0.02*max(t - 0.2, 0)", "-0.01*min(t/0.2, 1)"]
-friction = { type = "coulomb", coefficient = 1.0 }
-[time]
-T = 0.6
-k = 0.05
-[output]
-xdmf = false
-figures = false
-checkpoint_every = 8
-"""
+    text = _cylinder_on_a_block(
+        "moving_cylinder", "[-1.0, -0.5]", "[1.0, 0.0]", "[16, 4]",
+        "[-0.95, 0.0], upper = [0.95, 0.0]", '["0.02*max(t - 0.2, 0)", "-0.01*min(t/0.2, 1)"]',
+        1.0, "T = 0.6\nk = 0.05\n[output]\nxdmf = false\nfigures = false\ncheckpoint_every = 8\n",
+        plane_strain=True)
     scene = write_shared(shared_tmp_path / "moving_cylinder.toml", text)
     out = shared_tmp_path / "moving_cylinder"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
