@@ -211,6 +211,78 @@ def test_failed_run_exits_1_and_keeps_an_incomplete_summary(shared_tmp_path, cap
         assert "the simulation failed" in capsys.readouterr().err
 
 
+def test_a_negative_compliant_gap_at_one_node_is_a_located_error_on_every_rank(
+        shared_tmp_path, capsys):
+    """A normal-compliance gap below 0 at one node (here at the part's end, held by one process
+    on 2 ranks): ``validate`` and ``run`` refuse it at its line, exit 2, nothing written. The
+    part made its gaps on first use, during the run: ``validate`` passed it, ``run`` raised
+    after the output folder was made, and on 2 ranks only the owning process raised — the
+    other waited in a collective call and the run hung."""
+    text = _small("normal_compliance_2d", shared_tmp_path, "[8, 2]", 0.2, 0.05).read_text()
+    text = re.sub(r"(?m)^gap = .*$", 'gap = "-0.01 if x[0] < 0.1 else 0.0"', text)
+    path = write_shared(shared_tmp_path / "negative_gap.toml", text)
+    line = text.splitlines().index('gap = "-0.01 if x[0] < 0.1 else 0.0"') + 1
+    out = shared_tmp_path / "negative_gap"
+    for command in (["validate", str(path)], ["run", str(path), "--out", str(out), "--quiet"]):
+        assert cli.main(command) == 2
+        if MPI.COMM_WORLD.rank == 0:
+            err = capsys.readouterr().err
+            assert f"{path}:{line}: contact.gap:" in err and "-0.01" in err, err
+    assert not out.exists()
+
+
+def test_resuming_a_run_checkpointed_at_its_end_changes_nothing(shared_tmp_path, capsys):
+    """A run whose last checkpoint is its last step has nothing to resume: exit 2 with that
+    said, and its summary (completed) untouched. It was overwritten with "completed": false
+    and an unlocated message about the final time."""
+    path = _small("signorini_2d", shared_tmp_path, "[4, 4]", 0.5, 0.25,
+                  extra="\n[output]\nxdmf = false\nfigures = false\ncheckpoint_every = 1\n")
+    out = shared_tmp_path / "finished"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    summary = (out / "summary.json").read_bytes()
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet", "--resume"]) == 2
+    if MPI.COMM_WORLD.rank == 0:
+        assert "already reached T = 0.5" in capsys.readouterr().err
+    assert (out / "summary.json").read_bytes() == summary
+
+
+def test_output_folders_that_cannot_be_are_refused_by_every_command(shared_tmp_path, capsys):
+    """``--out`` naming a file is refused by ``study`` as by ``run`` (exit 2; it ended in an
+    internal error), an empty ``--out`` too (it wrote into output/<scene>), and the time
+    loop that the demos call refuses it with a located error (a traceback before)."""
+    from vpcontact.errors import InputError
+    from vpcontact.output import runner
+    from vpcontact.paper import bar1d
+
+    a_file = write_shared(shared_tmp_path / "a_file", "")
+    study = ["study", "convergence", "normal_compliance_1d", "--cells", "10", "--k", "0.1",
+             "--T", "1", "--levels", "2", "--quiet"]
+    assert cli.main(study + ["--out", str(a_file)]) == 2
+    assert cli.main(["run", "signorini_2d", "--out", "", "--quiet"]) == 2
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err
+        assert "an existing file, not a folder" in err and "--out is empty" in err, err
+    with pytest.raises(InputError, match="an existing file, not a folder"):
+        runner.run(bar1d.build_problem(4), 0.1, 0.05, out=a_file)
+
+
+@pytest.mark.parametrize("option", ["snes_type=newtonls", "snes_max_it=-5", "snes_rtol=nan",
+                                    "ksp_atol=-1", "snes_mf=1"])
+def test_solver_options_vpcontact_cannot_run_with_are_refused_up_front(shared_tmp_path, capsys,
+                                                                       option):
+    """Options PETSc takes but the step solver cannot use (a SNES without bounds for rigid
+    contact, a matrix-free SNES) or that PETSc refuses only in the middle of a solve, or never
+    (a negative iteration count, a NaN or negative tolerance): exit 2 naming the option,
+    nothing written. They ended in internal errors, or ran with the nonsense value."""
+    path = _small("signorini_2d", shared_tmp_path, "[4, 4]", 0.5, 0.25)
+    out = shared_tmp_path / "bad_option"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet",
+                     "--petsc-options", option]) == 2
+    if MPI.COMM_WORLD.rank == 0:
+        assert f"solver.petsc_options.{option.split('=')[0]}:" in capsys.readouterr().err
+    assert not out.exists()
+
+
 def test_a_quadratic_bar_writes_its_contact_history(shared_tmp_path):
     """The paper's 1-D bar with P2 displacements: its contact pressure, written as a P1 field,
     is gathered from the vertices of the one-component vector P2 space (whose coordinates

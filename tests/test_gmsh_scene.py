@@ -15,8 +15,9 @@ from vpcontact.scene import build
 LEFT, RIGHT, BOTTOM, BODY = 1, 2, 3, 10
 
 
-def _rectangle_msh(path):
-    """A 2 × 1 rectangle meshed by Gmsh; physical lines 1 (x = 0), 2 (x = 2), 3 (y = 0)."""
+def _rectangle_msh(path, order: int = 1):
+    """A 2 × 1 rectangle meshed by Gmsh; physical lines 1 (x = 0), 2 (x = 2), 3 (y = 0);
+    triangles of ``order`` (2: six-node, curved-capable geometry)."""
     if MPI.COMM_WORLD.rank == 0:
         gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
         gmsh.model.add("rectangle")
@@ -32,6 +33,7 @@ def _rectangle_msh(path):
         gmsh.model.addPhysicalGroup(2, [surface], BODY)
         gmsh.option.setNumber("Mesh.CharacteristicLengthMax", 0.2)
         gmsh.model.mesh.generate(2)
+        gmsh.model.mesh.setOrder(order)
         gmsh.write(str(path))
         gmsh.finalize()
     MPI.COMM_WORLD.barrier()
@@ -92,6 +94,40 @@ def test_gmsh_scene_runs_with_tagged_parts(shared_tmp_path):
     u = model.problem.u.x.array.reshape(-1, 2)
     low = comm.allreduce(float(u[:, 1].min()), op=MPI.MIN)
     assert low < 0.0 and np.isfinite(u).all()
+
+
+@pytest.mark.parametrize("contact", ["normal_compliance", "signorini"])
+def test_friction_on_a_second_order_gmsh_mesh(shared_tmp_path, contact):
+    """Six-node triangles from Gmsh, Coulomb friction on the floor: the stick stiffness's facet
+    size comes from the facet Jacobian on their (possibly curved) facets, as FFCx has no
+    FacetArea there (the run stopped with an internal error); it equals the facet's length on
+    these straight ones, so the floor's ∫ h_F ds is the sum of its facets' squared lengths."""
+    from dolfinx import fem
+    import ufl
+    from vpcontact.model.nodal_areas import facet_size
+
+    _rectangle_msh(shared_tmp_path / "block.msh", order=2)
+    text = SCENE.format(floor_tag=BOTTOM).replace("mu = 1e-7\n", (
+        'mu = 1e-7\nfriction = { type = "coulomb", coefficient = 0.3 }\n'
+        if contact == "normal_compliance" else
+        'friction = { type = "coulomb", coefficient = 0.3 }\n'
+        'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n')).replace(
+        'type = "normal_compliance"', f'type = "{contact}"')
+    path = shared_tmp_path / "block.toml"
+    if MPI.COMM_WORLD.rank == 0:
+        path.write_text(text)
+    MPI.COMM_WORLD.barrier()
+    model = build(scenes.load(path))
+    comm, msh = MPI.COMM_WORLD, model.problem.mesh
+    assert msh.geometry.cmap.degree == 2
+    floor = model.part_tags["floor"]
+    ds = ufl.Measure("ds", domain=msh, subdomain_data=model.facet_tags)(floor)
+    lengths = comm.allreduce(fem.assemble_scalar(fem.form(facet_size(msh) * ds)), op=MPI.SUM)
+    count = comm.allreduce(len(model.facet_tags.find(floor)), op=MPI.SUM)
+    assert lengths == pytest.approx(2.0 * 2.0 / count, rel=0.05)  # ≈ count facets of 2/count
+    for _ in range(4):
+        model.problem.step(0.25)
+    assert np.isfinite(model.problem.u.x.array).all()
 
 
 def test_missing_gmsh_tag_is_reported_at_its_part(shared_tmp_path, capsys):

@@ -241,6 +241,17 @@ def _petsc_options(pairs) -> dict:
     return options
 
 
+def _out_folder(given: Optional[str], default: Path) -> Path:
+    """``--out`` as given (an empty one refused: it would be the current folder), else the
+    default."""
+    if given is None:
+        return default
+    if not given.strip():
+        raise InputError("--out is empty: name the output folder (or leave --out out for "
+                         f"{default})")
+    return Path(given)
+
+
 def _run(args, comm) -> int:
     from vpcontact.output.interrupt import StopRequest
     from vpcontact.output.lock import OutputLock, check_folder
@@ -254,7 +265,7 @@ def _run(args, comm) -> int:
         solver = dataclasses.replace(scene.solver,
                                      petsc_options={**scene.solver.petsc_options, **extra})
         scene = dataclasses.replace(scene, solver=solver)
-    out = Path(args.out or Path("output") / scene.name)
+    out = _out_folder(args.out, Path("output") / scene.name)
     args.out_folder = out
     check_folder(out)
     with StopRequest() as stop:  # SIGINT/SIGTERM: stop after the step in progress
@@ -283,7 +294,9 @@ def _study_setup(args, comm):
     from vpcontact.studies import runs as study
     scene = _load(args.scene)
     grid = study.make_grid(scene, args.cells, args.k, args.T)
-    out = Path(args.out or Path("output") / scene.name / "study")
+    from vpcontact.output.lock import check_folder
+    out = _out_folder(args.out, Path("output") / scene.name / "study")
+    check_folder(out)
     if comm.rank == 0:
         out.mkdir(parents=True, exist_ok=True)
     comm.barrier()

@@ -83,12 +83,14 @@ def facet_size(mesh):
     fdim = mesh.topology.dim - 1
     if fdim == 0:
         return fem.Constant(mesh, 1.0)
-    if mesh.ufl_cell().is_simplex():
+    if mesh.ufl_domain().is_piecewise_linear_simplex_domain():
         return ufl.FacetArea(mesh) ** (1.0 / fdim)
-    # FFCx has no FacetArea on quadrilaterals and hexahedra: there the facet Jacobian's
-    # determinant is the size of a straight edge or of a parallelogram face (their reference
-    # facets, [0, 1] and [0, 1]², measure 1)
-    return abs(FacetJacobianDeterminant(mesh)) ** (1.0 / fdim)
+    # FFCx has no FacetArea on quadrilaterals, hexahedra and curved (second-order) cells: there
+    # the facet Jacobian's determinant is the size of a straight edge or of a parallelogram face
+    # (the reference facets [0, 1] and [0, 1]² measure 1; a triangle's measures 1/2), pointwise
+    # on a curved one
+    reference = 0.5 if mesh.ufl_cell().is_simplex() and fdim == 2 else 1.0
+    return (reference * abs(FacetJacobianDeterminant(mesh))) ** (1.0 / fdim)
 
 
 def facet_sizes(V: fem.FunctionSpace, facet_tags, tag: int):

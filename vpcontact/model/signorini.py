@@ -254,7 +254,7 @@ def _framed_contact_dofs(V, facet_tags, contact, exclude, time) -> ContactDofs:
     points = V.tabulate_dof_coordinates()[nodes]
     dofs = (nodes * bs + fr.slots).astype(np.int32)
     cd = ContactDofs(None, 1.0, dofs, points, np.zeros(len(nodes)), nodes, fr.normals, fr.signs, fr)
-    cd.gap = contact_gap(contact, cd, time)
+    cd.gap = contact_gap(contact, cd, time, mesh.comm)
     return cd
 
 
@@ -285,13 +285,30 @@ def _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time) -> Con
     normals[:, axis] = sign
     cd = ContactDofs(axis, sign, parent, points, np.zeros(len(parent)),
                      (parent // bs).astype(np.int32), normals, np.full(len(parent), sign))
-    cd.gap = contact_gap(contact, cd, time)
+    cd.gap = contact_gap(contact, cd, time, V.mesh.comm)
     return cd
 
 
-def contact_gap(contact: Signorini, cd: ContactDofs, time: float = 0.0) -> np.ndarray:
+def contact_gap(contact: Signorini, cd: ContactDofs, time: float = 0.0,
+                comm=MPI.COMM_WORLD) -> np.ndarray:
     """g at the contact nodes at time ``time``: the distance along each node's normal to the
-    obstacle (in its position at that time), or the scene's g(x)."""
+    obstacle (in its position at that time), or the scene's g(x). Collective: a bad gap on one
+    process is every process's error (raised on one alone, it left the others waiting in
+    their next collective call: a 2-rank run hung)."""
+    error = None
+    try:
+        gap = _local_gap(contact, cd, time)
+    except InputError as err:
+        error = err
+    errors = comm.allgather(None if error is None else (str(error), error.key))
+    first = next((e for e in errors if e is not None), None)
+    if first is not None:
+        raise error if error is not None else InputError(first[0], key=first[1])
+    return gap
+
+
+def _local_gap(contact: Signorini, cd: ContactDofs, time: float) -> np.ndarray:
+    """:func:`contact_gap` at this process's nodes."""
     points = cd.points
     if contact.obstacle is not None:
         normals = np.zeros((len(points), 3))
@@ -316,9 +333,9 @@ def contact_gap(contact: Signorini, cd: ContactDofs, time: float = 0.0) -> np.nd
                          f"obstacle at t = {time:g} (gap {gap[bad[0]]:.6g})",
                              key="contact.obstacle")
     if len(bad):
-        raise InputError(f"the Signorini gap must be finite and >= 0 at every contact point; it is "
-                         f"{gap[bad[0]]:.6g} at {points[bad[0]].round(12).tolist()}",
-                             key="contact.gap")
+        raise InputError(f"the gap must be finite and >= 0 at every contact point (the body "
+                         f"starts out of contact); it is {gap[bad[0]]:.6g} at "
+                         f"{points[bad[0]].round(12).tolist()}", key="contact.gap")
     return gap
 
 
@@ -533,7 +550,8 @@ class SignoriniPart:
     def update(self, time: float) -> None:
         """The gaps at ``time`` (raises InputError where a ray loses the obstacle)."""
         if self.moving:
-            self._nodes.gap = contact_gap(self.law, self._nodes, time)
+            self._nodes.gap = contact_gap(self.law, self._nodes, time,
+                                          self.u.function_space.mesh.comm)
             if self.obstacle_normals is not None:
                 self.obstacle_normals.refresh(time)
         if self.friction is not None and (self.law.translation is not None

@@ -174,6 +174,9 @@ def load(out: Path, problem, scene, comm) -> Restart:
             problem_text = f"--resume: cannot read {folder / MANIFEST}: {err}"
         if manifest is not None and problem_text is None:
             problem_text = _mismatch(manifest, scene, comm)
+        if problem_text is None and manifest["time"] >= scene.time.T * (1 - 1e-12):
+            problem_text = (f"--resume: the run in {out} already reached T = {scene.time.T:g} "
+                            "(its last checkpoint is at its last step): nothing to resume")
     problem_text = comm.bcast(problem_text, root=0)
     if problem_text is not None:
         raise InputError(problem_text)

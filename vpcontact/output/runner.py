@@ -14,6 +14,7 @@ from vpcontact.output.fields import CellStress, ContactHistory, XdmfSeries
 from vpcontact.errors import INTERNAL_ERROR, OutputError, VpcontactError
 from vpcontact.output.checkpoint import Checkpointer, Restart, restore_control
 from vpcontact.output.forces import ForceHistory
+from vpcontact.output.lock import check_folder
 
 #: Step lines (``verbose``) go to this logger at INFO; :func:`vpcontact.cli.configure_logging`
 #: shows vpcontact's INFO messages on standard output.
@@ -132,6 +133,7 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                        problem.stress_correction_at_points)
     series = None
     if out is not None:
+        check_folder(out)  # (a file there, or a path under one: a located refusal)
         if comm.rank == 0:
             Path(out).mkdir(parents=True, exist_ok=True)
         comm.barrier()

@@ -192,6 +192,9 @@ class QuasistaticProblem:
                 part = condition.part(self.u, facet_tags, residual, name=name, exclude=taken,
                                       rotate=rotate_contact,
                                       shear_modulus=_shear_modulus(law))
+                # (a compliant part makes its nodes and gaps on first use: asked for here, a
+                # bad gap is refused by every process before anything runs)
+                _ = part.nodes
             except InputError as err:
                 err.part = name
                 raise

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
+
 from petsc4py import PETSc
 
 from vpcontact.errors import SolverOptionError
@@ -60,6 +62,35 @@ def _forget(prefix: str, keys) -> None:
     for key in keys:
         if opts.hasName(prefix + key):
             opts.delValue(prefix + key)
+
+
+#: options whose value PETSc takes but vpcontact cannot run with, and why
+_UNSUPPORTED = {
+    "snes_mf": "vpcontact assembles its Jacobians (and SNES VI needs them): no matrix-free SNES",
+    "snes_mf_operator": "vpcontact assembles its Jacobians: no matrix-free operator",
+}
+
+
+def check_values(options: dict) -> None:
+    """Refuse, before any solver reads them, option values that PETSc would only refuse in the
+    middle of a solve or not at all (a negative iteration count, a tolerance that is negative,
+    NaN or infinite) and options vpcontact cannot run with; SolverOptionError naming the
+    option. (Values that are not numbers, e.g. PETSc's ``default``, are left to PETSc.)"""
+    for key, value in options.items():
+        name = str(key).lstrip("-")
+        if name in _UNSUPPORTED and str(value).strip().lower() not in ("0", "false", "no"):
+            raise SolverOptionError(f"{name}: {_UNSUPPORTED[name]}", name)
+        counted = name.endswith(("max_it", "max_funcs"))
+        if not (counted or name.endswith(("rtol", "atol", "stol"))):
+            continue
+        try:
+            number = float(str(value))
+        except ValueError:
+            continue
+        if counted and not (np.isfinite(number) and number >= 0 and number == int(number)):
+            raise SolverOptionError(f"{name} = {value!r}: must be a whole number >= 0", name)
+        if not counted and not (np.isfinite(number) and number >= 0):
+            raise SolverOptionError(f"{name} = {value!r}: must be a finite number >= 0", name)
 
 
 def rejected_option(err: Exception, options: dict) -> SolverOptionError:

@@ -26,7 +26,7 @@ from vpcontact.errors import ConvergenceError, InputError, SolverOptionError
 from vpcontact.solver import linear as linear_solvers
 from vpcontact.solver import p_multigrid
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
-                                          rejected_option)
+                                          check_values, rejected_option)
 from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
                                         rigid_body_modes)
 
@@ -239,6 +239,7 @@ class StepSolver:
                     stars=stars, coarse=coarse)
             else:
                 self._A.setNearNullSpace(self._modes)
+        check_values(petsc_options or {})
         self._options = {**defaults, **(petsc_options or {})}
         try:
             self._read_options()
@@ -335,8 +336,9 @@ class StepSolver:
         that satisfies the bounds (then it solves the VI too, with no active constraint).
         """
         if not self.snes.getType().startswith("vi"):
-            raise ValueError(f"SNES type {self.snes.getType()!r} cannot take variable bounds; "
-                             "use vinewtonrsls or vinewtonssls")
+            raise SolverOptionError(f"snes_type {self.snes.getType()!r} cannot take the bounds "
+                                    "of rigid contact (Signorini): use vinewtonrsls or "
+                                    "vinewtonssls", "snes_type")
         lower, upper = (self._embedded(lower, PETSc.NINFINITY),
                         self._embedded(upper, PETSc.INFINITY))
         for vec in (lower, upper):

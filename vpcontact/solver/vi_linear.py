@@ -571,7 +571,8 @@ def rigid_body_modes(V, variables=None, layout=None) -> PETSc.NullSpace:
     the modes are written in those frames."""
     bs = V.dofmap.index_map_bs
     owned = V.dofmap.index_map.size_local
-    x = V.tabulate_dof_coordinates()[:owned]
+    # (a bar's one-component space cannot tabulate its coordinates; its one mode is a translation)
+    x = V.tabulate_dof_coordinates()[:owned] if bs > 1 else None
     fields = [np.eye(bs)[i] * np.ones((owned, 1)) for i in range(bs)]  # translations
     if bs == 2:
         fields.append(np.column_stack([-x[:, 1], x[:, 0]]))
