@@ -186,6 +186,29 @@ def test_a_torn_checkpoint_write_leaves_the_last_one_usable(tmp_path):
     assert (out / "contact.csv").read_bytes() == (full / "contact.csv").read_bytes()
 
 
+def test_resume_after_a_crash_that_spoiled_the_xdmf_file(tmp_path):
+    """A run killed while writing leaves its HDF5 file unreadable (its header zeroed) though the
+    checkpoint is intact: --resume sets the series aside (<name>.broken1.xdmf/.h5), starts it
+    again at the checkpoint, says so in one warning (stderr and summary.json) and ends where an
+    uninterrupted run ends. It failed with exit 1 (HDF5 could not open the file to append)."""
+    scene = _scene(tmp_path)
+    scene.write_text(scene.read_text().replace("T = 1.0", "T = 0.3"))
+    out, full = tmp_path / "out", tmp_path / "full"
+    assert _run(scene, full, 1, "--quiet").returncode == 0
+    assert _run(scene, out, 1, "--quiet").returncode == 0
+    series = next(out.glob("*.xdmf"))
+    with open(series.with_suffix(".h5"), "r+b") as h5:
+        h5.write(bytes(512))
+    resumed = _run(scene, out, 1, "--resume", "--quiet")
+    assert resumed.returncode == 0, resumed.stderr
+    assert f"set aside as {series.stem}.broken1.xdmf" in resumed.stderr, resumed.stderr
+    assert series.with_name(f"{series.stem}.broken1.h5").exists() and series.exists()
+    assert any("set aside" in w for w in _summary(out)["warnings"])
+    assert (out / "contact.csv").read_bytes() == (full / "contact.csv").read_bytes()
+    restart = _summary(out)["resumed_from"]["time"]
+    assert _xdmf_times(series) and min(_xdmf_times(series)) > restart
+
+
 def test_out_is_an_existing_file(tmp_path, capsys):
     scene = _scene(tmp_path)
     target = tmp_path / "result"

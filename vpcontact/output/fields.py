@@ -15,6 +15,7 @@ import numpy as np
 import ufl
 from dolfinx import fem, io
 from dolfinx import mesh as dmesh
+from mpi4py import MPI
 
 from vpcontact.kernels.mandel import from_mandel
 from vpcontact.model.quadrature import QuadratureState
@@ -89,10 +90,17 @@ class XdmfSeries:
             V1 = fem.VectorFunctionSpace(mesh, ("Lagrange", 1), dim=mesh.geometry.dim)
             self._u_out = fem.Function(V1, name="displacement")
         self.skip: set[float] = set()  # times already in the file (a resumed run's)
+        #: where an unreadable series of a run that died was set aside (None: it was not)
+        self.set_aside: Optional[Path] = None
+        self.file = None
         if append and Path(path).is_file():
             self.skip = written_times(path, mesh.comm)
-            self.file = io.XDMFFile(mesh.comm, str(path), "a")
-        else:
+            self.file = _open_to_append(path, mesh.comm)
+            if self.file is None:
+                # A run killed while writing leaves its HDF5 file unreadable (a zeroed header):
+                # keep it aside for what can be recovered, and start the series afresh.
+                self.set_aside, self.skip = _set_aside(Path(path), mesh.comm), set()
+        if self.file is None:
             self.file = io.XDMFFile(mesh.comm, str(path), "w")
             self.file.write_mesh(mesh)
 
@@ -125,6 +133,34 @@ def on_rank0(comm, action) -> None:
     failure = comm.bcast(failure, root=0)
     if failure is not None:
         raise OSError(failure)
+
+
+def _open_to_append(path: Path, comm) -> Optional[io.XDMFFile]:
+    """The XDMF file opened to append to, or None (on every rank) where it cannot be."""
+    try:
+        file = io.XDMFFile(comm, str(path), "a")
+    except RuntimeError:
+        file = None
+    if comm.allreduce(file is None, op=MPI.LOR):
+        if file is not None:
+            file.close()
+        return None
+    return file
+
+
+def _set_aside(path: Path, comm) -> Path:
+    """Rename the series ``path`` (.xdmf and .h5) to the first free ``<stem>.broken<n>``; the
+    new .xdmf's name (collective)."""
+    new = None
+    if comm.rank == 0:
+        n = 1
+        while any(path.with_name(f"{path.stem}.broken{n}{s}").exists() for s in (".xdmf", ".h5")):
+            n += 1
+        new = path.with_name(f"{path.stem}.broken{n}.xdmf")
+    new = comm.bcast(new, root=0)
+    on_rank0(comm, lambda: [p.rename(new.with_suffix(p.suffix)) for p in
+                            (path, path.with_suffix(".h5")) if p.exists()])
+    return new
 
 
 def written_times(path: str | Path, comm) -> set[float]:

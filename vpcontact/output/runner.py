@@ -37,6 +37,7 @@ class RunRecord:
     interrupted: Optional[str] = None                # the signal that stopped the run, if any
     wall_time: float = 0.0                           # [s] the whole run, outputs included
     output_time: float = 0.0                         # [s] writing XDMF, recording the history
+    warnings: list = field(default_factory=list)     # what the user should know (one line each)
 
 
 @contextmanager
@@ -147,6 +148,11 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
             series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells,
                                 extra=extra + list(xdmf_extra),
                                 append=restart is not None)
+        if series.set_aside is not None:
+            note = (f"{name}.xdmf/.h5 could not be appended to (a run that died while writing "
+                    f"leaves them unreadable): set aside as {series.set_aside.name} and .h5; the "
+                    f"series starts again at the checkpoint's t = {restart.time:g}")
+            record.warnings.append(note)  # (the command line prints them at the end)
     if history is None and problem.contact_dofs is not None:
         history = ContactHistory(problem, [p for p in problem.contacts if p.bounded])
     if restart is not None:

@@ -105,7 +105,8 @@ class Session:
         wall = time.perf_counter() - start
         if record is not None and record.interrupted and error is None:
             error = Interrupted(record.interrupted, record.times[-1] if record.times else 0.0)
-        warnings = self._contact_warnings(history, record) if error is None else []
+        warnings = list(record.warnings) if record is not None else []
+        warnings += self._contact_warnings(history, record) if error is None else []
         try:
             self._write_summary(record, wall, error, warnings)
         except OSError as err:
