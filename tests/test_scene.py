@@ -331,6 +331,7 @@ def test_wrong_types(old, new, match):
 @pytest.mark.parametrize("old, new, path, match", [
     ("E = 1e8", "E = -1", "material.E", "must be > 0, got -1"),
     ("E = 1e8", "E = 0", "material.E", "must be > 0, got 0"),
+    ("E = 1e8", "E = 1e308", "material.E", r"must lie in \[1e-100, 1e\+100\], got 1e\+308"),
     ("nu = 0.3", "nu = 0.5", "material.nu", r"nu = 0.5 \(incompressible\) needs \[discretization\] formulation = \"mixed\""),
     ("nu = 0.3", "nu = 0.51", "material.nu", r"must lie in \(-1, 0.5\], got 0.51"),
     ("nu = 0.3", "nu = -1.0", "material.nu", r"must lie in \(-1, 0.5\], got -1"),

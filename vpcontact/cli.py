@@ -62,7 +62,7 @@ def main(argv: Optional[list] = None) -> int:
         if args.traceback:
             raise
         _error(comm, f"internal error, a bug in vpcontact rather than in the scene: "
-                     f"{type(err).__name__}: {err}. The completed steps were kept "
+                     f"{type(err).__name__}: {err}. A run keeps the steps it completed "
                      "(summary.json says \"completed\": false). Please report it with the "
                      "scene file; `vpcontact --traceback ...` shows where it happened.")
         return INTERNAL_ERROR

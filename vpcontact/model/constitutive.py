@@ -32,6 +32,11 @@ SCHEMES = ("explicit", "implicit", "linearized")
 INCOMPRESSIBLE_SURROGATE_NU = 0.3
 
 
+#: Young's moduli a run can hold in double precision, in any units (steel in Pa is 2e11; E = 1e308
+#: passed validation and overflowed in the first stress update)
+MIN_MODULUS, MAX_MODULUS = 1e-100, 1e100
+
+
 @dataclass(frozen=True)
 class Elasticity:
     """Isotropic elasticity tensor E of a model.
@@ -56,6 +61,11 @@ class Elasticity:
                              key="law")
         if not (math.isfinite(self.E) and self.E > 0):
             raise InputError(f"Young's modulus E must be finite and > 0, got {self.E}",
+                             key="material.E")
+        if not MIN_MODULUS <= self.E <= MAX_MODULUS:
+            raise InputError(f"Young's modulus E = {self.E:g} lies outside [{MIN_MODULUS:g}, "
+                             f"{MAX_MODULUS:g}]: the stresses (E times the strains) and their "
+                             "squares would leave double precision; choose other units",
                              key="material.E")
         if self.model != "1d" and not -1.0 < self.nu <= 0.5:
             raise InputError(f"Poisson's ratio nu must lie in (-1, 0.5], got {self.nu}",

@@ -19,6 +19,7 @@ from vpcontact.scene.physics import read_contacts, read_law
 from vpcontact.scene.schema import (REQUIRED, Report, Table, at_least, between, fmt, greater, type_name,
                                     unknown_key)
 from vpcontact.linear_solvers import LINEAR_SOLVERS
+from vpcontact.model.constitutive import MAX_MODULUS, MIN_MODULUS
 from vpcontact.model.locking import FORMULATIONS, locking_expected
 from vpcontact.scene.specs import (BUILTIN_MESHES, CELL_TYPES, DIAGONALS, BoundaryPart,
                                    BoxSelector, ContactSpec, InitialSpec, LawSpec, LoadSpec,
@@ -305,7 +306,9 @@ def read_loads(top: Table, dim: int | None) -> LoadSpec:
 def read_material(top: Table, dim: int | None) -> MaterialSpec:
     """``[material]``: E, ν (not in 1-D) and the 2-D model."""
     t = top.section("material", ("E", "nu", "plane"), required=True)
-    young = t.number("E", check=greater(0))
+    # (E ≤ 0 is not a material; outside [1e-100, 1e100] the stresses leave double precision)
+    young = t.number("E", check=lambda v: (greater(0)(v)
+                                           or between(MIN_MODULUS, MAX_MODULUS, "[]")(v)))
     nu = plane = None
     if dim == 1:
         t.forbid("nu", "Poisson's ratio is not used in 1-D")
