@@ -283,6 +283,20 @@ def test_solver_options_vpcontact_cannot_run_with_are_refused_up_front(shared_tm
     assert not out.exists()
 
 
+def test_a_mesh_with_fewer_cells_than_processes_is_refused_at_its_line(shared_tmp_path,
+                                                                        capsys):
+    """A 1-cell bar is a valid scene serially; on 2 ranks one process holds no cell, raised in
+    the set-up and left the other waiting in a collective call (validate, run and study hung).
+    Now: a located error on every process, exit 2."""
+    path = _small("normal_compliance_1d", shared_tmp_path, "[1]", 0.1, 0.05)
+    expected = 0 if MPI.COMM_WORLD.size == 1 else 2
+    assert cli.main(["validate", str(path)]) == expected
+    if expected and MPI.COMM_WORLD.rank == 0:
+        line = path.read_text().splitlines().index("cells = [1]") + 1
+        assert f"{path}:{line}: mesh.cells: the mesh has 1 cell(s), too few for 2" in \
+            capsys.readouterr().err
+
+
 def test_a_quadratic_bar_writes_its_contact_history(shared_tmp_path):
     """The paper's 1-D bar with P2 displacements: its contact pressure, written as a P1 field,
     is gathered from the vertices of the one-component vector P2 space (whose coordinates

@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""The size of a mesh: the longest side of its bounding box, the same on every rank.
+"""The size of a mesh: the longest side of its bounding box, the same on every rank; and the
+coordinates of a space's nodes.
 
 Lengths that scale tolerances and penalty-like stiffnesses (friction's stick stiffness
 SNES's unknown scale, search tolerances) are taken relative to it. The
@@ -23,3 +24,16 @@ def mesh_extent(mesh) -> float:
     mesh.comm.Allreduce(MPI.IN_PLACE, lower, op=MPI.MIN)
     mesh.comm.Allreduce(MPI.IN_PLACE, upper, op=MPI.MAX)
     return float(np.max(upper - lower))
+
+
+def node_coordinates(V) -> np.ndarray:
+    """The coordinates (n, 3) of the nodes (blocks) of the space ``V``, ghosts included. dolfinx
+    will not tabulate them for a one-component vector space (a bar's displacement): there they
+    come from its collapsed component."""
+    if V.num_sub_spaces == 0 or V.dofmap.index_map_bs > 1:
+        return V.tabulate_dof_coordinates()
+    scalar, to_parent = V.sub(0).collapse()
+    index_map = V.dofmap.index_map
+    x = np.empty((index_map.size_local + index_map.num_ghosts, 3))
+    x[np.asarray(to_parent) // V.dofmap.index_map_bs] = scalar.tabulate_dof_coordinates()
+    return x

@@ -61,6 +61,7 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
         SceneError: a problem only visible on the mesh, located in the scene file.
     """
     mesh, gmsh_tags = _mesh(scene, comm)
+    _check_partition(scene, mesh)
     part_tags, facet_tags = _boundary_parts(scene, mesh, gmsh_tags)
     law = _law(scene)
     limit = law.explicit_step_limit()
@@ -90,6 +91,18 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
     _check_contact_output(scene, mesh, facet_tags, part_tags)
     _initial_state(scene, problem)
     return Model(scene, problem, facet_tags, part_tags)
+
+
+def _check_partition(scene: Scene, mesh) -> None:
+    """Every process needs cells (collective): one without any raised in the set-up while the
+    others waited for it in a collective call (a 1-cell bar on 2 ranks hung)."""
+    comm, tdim = mesh.comm, mesh.topology.dim
+    cells = mesh.topology.index_map(tdim).size_local
+    if comm.allreduce(int(cells == 0), op=MPI.SUM):
+        total = comm.allreduce(cells, op=MPI.SUM)
+        raise scene.error("mesh" if scene.mesh.type == "gmsh" else "mesh.cells",
+                          f"the mesh has {total} cell(s), too few for {comm.size} processes "
+                          "(each needs some): refine it or run on fewer processes")
 
 
 def _scene_key(scene: Scene, err: InputError) -> str:

@@ -30,6 +30,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from vpcontact.errors import InputError
+from vpcontact.model.extent import node_coordinates
 
 #: A prescribed component: a number, or a function (x: (3, N) points, t) -> (N,) values.
 Value = Union[float, Callable[[np.ndarray, float], np.ndarray]]
@@ -183,7 +184,7 @@ class DirichletParts:
         names, modes = _rigid_modes(dim)
         owned = V.dofmap.index_map.size_local * dim
         dofs = self.prescribed[self.prescribed < owned]
-        x = V.tabulate_dof_coordinates()[dofs // dim]
+        x = node_coordinates(V)[dofs // dim]
         lo = np.min(comm.allgather(mesh.geometry.x.min(axis=0)), axis=0)
         hi = np.max(comm.allgather(mesh.geometry.x.max(axis=0)), axis=0)
         size = max(float(np.max(hi - lo)), np.finfo(float).tiny)
@@ -208,7 +209,7 @@ def rigid_mode_values(V, coefficients: np.ndarray) -> np.ndarray:
     lo = np.min(comm.allgather(mesh.geometry.x.min(axis=0)), axis=0)
     hi = np.max(comm.allgather(mesh.geometry.x.max(axis=0)), axis=0)
     size = max(float(np.max(hi - lo)), np.finfo(float).tiny)
-    x = (V.tabulate_dof_coordinates() - 0.5 * (lo + hi)) / size
+    x = (node_coordinates(V) - 0.5 * (lo + hi)) / size
     _, modes = _rigid_modes(dim)
     return sum(float(c) * np.asarray(m(x), dtype=np.float64)
                for c, m in zip(coefficients, modes)).ravel()

@@ -11,7 +11,7 @@ import ufl
 from dolfinx import fem, mesh as dmesh
 from mpi4py import MPI
 
-from vpcontact.model.extent import mesh_extent
+from vpcontact.model.extent import mesh_extent, node_coordinates
 from vpcontact.errors import InputError
 
 #: A load is a function (x, t) -> UFL expression, x the spatial coordinate, t a time Constant.
@@ -45,8 +45,7 @@ class PointDofs:
         at[:dim] = np.asarray(load.at, dtype=np.float64)[:dim]
         extent = mesh_extent(mesh)
         tol = 1e-8 * extent
-        blocks = fem.locate_dofs_geometrical(
-            V, lambda x: np.linalg.norm(x - at[:, None], axis=0) <= tol)
+        blocks = np.flatnonzero(np.linalg.norm(node_coordinates(V) - at, axis=1) <= tol)
         owned = blocks[blocks < V.dofmap.index_map.size_local]
         found = mesh.comm.allreduce(len(owned), op=MPI.SUM)
         if found == 0:
