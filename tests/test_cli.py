@@ -297,6 +297,20 @@ def test_a_mesh_with_fewer_cells_than_processes_is_refused_at_its_line(shared_tm
             capsys.readouterr().err
 
 
+def test_a_viewer_option_given_true_switches_it_on(shared_tmp_path, capfd):
+    """``snes_converged_reason = true`` (natural in TOML and on the command line) is PETSc's
+    bare flag: the reason is printed and the run completes. PETSc took "true" for a viewer's
+    name and the run stopped with an internal error; ``false`` leaves the option off."""
+    path = _small("elastic_2d", shared_tmp_path, "[4, 2]", 1.0, 0.5)
+    for value, shown in (("true", True), ("false", False)):
+        out = shared_tmp_path / f"reason_{value}"
+        assert cli.main(["run", str(path), "--out", str(out), "--quiet", "--petsc-options",
+                         f"snes_converged_reason={value}"]) == 0
+        printed = capfd.readouterr().out
+        if MPI.COMM_WORLD.rank == 0:
+            assert ("solve converged due to" in printed) == shown, printed
+
+
 def test_a_quadratic_bar_writes_its_contact_history(shared_tmp_path):
     """The paper's 1-D bar with P2 displacements: its contact pressure, written as a P1 field,
     is gathered from the vertices of the one-component vector P2 space (whose coordinates

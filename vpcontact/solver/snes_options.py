@@ -71,6 +71,25 @@ _UNSUPPORTED = {
 }
 
 
+#: options that take a PETSc viewer, or nothing to switch them on
+_VIEWER_SUFFIXES = ("_view", "_monitor", "_converged_reason")
+
+
+def viewer_flags(options: dict) -> dict:
+    """``options`` with a boolean given to a viewer option (``snes_converged_reason = true``,
+    natural in TOML) made PETSc's bare flag ("" on; off dropped): PETSc read "true" as a
+    viewer's name and failed in the middle of a solve."""
+    result = {}
+    for key, value in options.items():
+        word = str(value).strip().lower()
+        if str(key).endswith(_VIEWER_SUFFIXES) and word in ("true", "1", "yes", "false", "0", "no"):
+            if word in ("true", "1", "yes"):
+                result[key] = ""
+            continue
+        result[key] = value
+    return result
+
+
 def check_values(options: dict) -> None:
     """Refuse, before any solver reads them, option values that PETSc would only refuse in the
     middle of a solve or not at all (a negative iteration count, a tolerance that is negative,

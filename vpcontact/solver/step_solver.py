@@ -26,7 +26,7 @@ from vpcontact.errors import ConvergenceError, InputError, SolverOptionError
 from vpcontact.solver import linear as linear_solvers
 from vpcontact.solver import p_multigrid
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
-                                          check_values, rejected_option)
+                                          check_values, rejected_option, viewer_flags)
 from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
                                         rigid_body_modes)
 
@@ -239,8 +239,9 @@ class StepSolver:
                     stars=stars, coarse=coarse)
             else:
                 self._A.setNearNullSpace(self._modes)
-        check_values(petsc_options or {})
-        self._options = {**defaults, **(petsc_options or {})}
+        petsc_options = viewer_flags(petsc_options or {})
+        check_values(petsc_options)
+        self._options = {**defaults, **petsc_options}
         try:
             self._read_options()
             self._setup(self.snes)
