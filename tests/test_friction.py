@@ -79,6 +79,14 @@ def _signorini_dragged(obstacle: str) -> str:
         "mu = 1e-3\n", obstacle).replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
 
 
+def _dragged_on(floor: str) -> str:
+    """DRAGGED with Coulomb friction 𝔣 = 0.3 on a ``"rigid"`` floor (a Signorini plane) or on
+    its compliant one."""
+    if floor == "rigid":
+        return _signorini_dragged(PLANE_FLOOR)
+    return DRAGGED.replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+
+
 def _forces(out):
     lines = (out / "reactions.csv").read_text().splitlines()
     header = lines[0].split(",")
@@ -799,10 +807,8 @@ def test_reactions_split_each_part_s_force_into_normal_and_tangential(shared_tmp
     the magnitude of its tangential force. On the flat floor they are the contact force's
     components (N = F_y, |T| = |F_x| to round-off), |T| = 𝔣 N while the block slides, and a
     run resumed from its last checkpoint writes the same file."""
-    coulomb = 'friction = { type = "coulomb", coefficient = 0.3 }'
-    text = (_signorini_dragged(PLANE_FLOOR) if floor == "rigid"
-            else DRAGGED.replace("FRICTION", coulomb))
-    text = text.replace("figures = false\n", "figures = false\ncheckpoint_every = 4\n")
+    text = _dragged_on(floor).replace("figures = false\n",
+                                      "figures = false\ncheckpoint_every = 4\n")
     scene = write_shared(shared_tmp_path / f"split_{floor}.toml", text)
     out = shared_tmp_path / f"split_{floor}"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
@@ -1126,10 +1132,8 @@ def test_the_dragged_block_on_quadrilaterals_slides_with_the_coulomb_ratio(share
     """The dragged block meshed by quadrilaterals: the stick stiffness's facet size comes from
     the facet Jacobian there (FFCx has no FacetArea on them: the run stopped with an internal
     error), and while the block slides its tangential force is 0.3 × the normal one."""
-    coulomb = 'friction = { type = "coulomb", coefficient = 0.3 }'
-    text = (_signorini_dragged(PLANE_FLOOR) if floor == "rigid"
-            else DRAGGED.replace("FRICTION", coulomb))
-    text = text.replace("cells = [16, 4]\n", 'cells = [16, 4]\ncell_type = "quadrilateral"\n')
+    text = _dragged_on(floor).replace("cells = [16, 4]\n",
+                                      'cells = [16, 4]\ncell_type = "quadrilateral"\n')
     scene = write_shared(shared_tmp_path / f"quads_{floor}.toml", text)
     out = shared_tmp_path / f"quads_{floor}"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0

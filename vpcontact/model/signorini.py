@@ -289,8 +289,7 @@ def _aligned_contact_dofs(V, facet_tags, contact, exclude, aligned, time) -> Con
     return cd
 
 
-def contact_gap(contact: Signorini, cd: ContactDofs, time: float = 0.0,
-                comm=MPI.COMM_WORLD) -> np.ndarray:
+def contact_gap(contact: Signorini, cd: ContactDofs, time: float, comm) -> np.ndarray:
     """g at the contact nodes at time ``time``: the distance along each node's normal to the
     obstacle (in its position at that time), or the scene's g(x). Collective: a bad gap on one
     process is every process's error (raised on one alone, it left the others waiting in
