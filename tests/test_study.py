@@ -73,6 +73,17 @@ def test_perzyna_2d_first_order_in_k_against_a_finer_run(tmp_path):
         assert "P1, implicit Euler with h" in (tmp_path / "study" / "convergence.md").read_text()
 
 
+def test_convergence_study_runs_the_scenes_own_discretization(tmp_path):
+    """A plane-strain Perzyna scene is Taylor–Hood by default (P1 would lock under its
+    volume-keeping flow): without --degree the study runs that, not the paper's P1 (which it
+    ran before, whatever the scene)."""
+    assert _study(tmp_path, "convergence", "indentation_relaxation", "--cells", "10", "5",
+                  "--T", "0.2", "--k", "0.1", "--levels", "2", "--refine", "k") == 0
+    if ROOT0:
+        text = (tmp_path / "study" / "convergence.md").read_text()
+        assert "P2, implicit Euler" in text and "P1" not in text, text[:300]
+
+
 def test_cost_study_pareto_front(tmp_path):
     """Every method on a 2 × 2 grid of (h, k); the runs marked Pareto are exactly those no run
     beats in both time and error, and the advice has a sentence per method."""

@@ -149,7 +149,10 @@ def _parser() -> argparse.ArgumentParser:
     conv.add_argument("--refine", choices=("both", "h", "k"), default="both",
                       help="what to halve at each level (default: both, the paper's h = k path)")
     conv.add_argument("--levels", type=int, default=4, help="number of refinements (default 4)")
-    conv.add_argument("--degree", type=int, choices=(1, 2), default=1)
+    conv.add_argument("--degree", type=int, choices=(1, 2), default=None,
+                      help="displacement degree: 1 is the displacement formulation (the paper's "
+                           "P1), 2 the scene's formulation with P2 (default: the scene's own, "
+                           "Taylor-Hood where the scene would lock)")
     conv.add_argument("--law-scheme", choices=("explicit", "implicit", "linearized"),
                       help="Euler scheme of the law (default: the scene's)")
     conv.add_argument("--time-scheme", choices=("euler", "bdf2"), default="euler")
@@ -314,7 +317,7 @@ def _study_convergence(args, comm) -> int:
     from vpcontact.studies import runs as study
     from vpcontact.studies import report as study_report
     scene, grid, out, progress = _study_setup(args, comm)
-    method = study.Method(args.degree, args.law_scheme or scene.law.scheme, args.time_scheme)
+    method = study.Method(args.degree or scene.degree, args.law_scheme or scene.law.scheme, args.time_scheme)
     runs, reference = study.convergence(scene, grid, method, args.refine, args.levels, args.exact,
                                         comm, progress)
     if comm.rank == 0:
