@@ -296,6 +296,27 @@ def test_a_signal_during_set_up_stops_before_the_first_step(tmp_path, monkeypatc
     assert _summary(out)["completed"] and _summary(out)["steps"] == 4
 
 
+def test_a_signal_during_the_last_step_leaves_a_completed_run(tmp_path, monkeypatch, capsys):
+    """SIGINT while the last step is being solved: the run has reached T, so it is complete
+    (exit 0, summary completed). It used to end as interrupted (exit 130), and its --resume
+    then found nothing to resume."""
+    from vpcontact.output import runner
+    advance = runner.advance
+
+    def signal_in_last_step(problem, t_final, control):
+        for step in advance(problem, t_final, control):
+            if step.time >= t_final * (1 - 1e-12):
+                os.kill(os.getpid(), signal.SIGINT)  # noted by the handler vpcontact run installed
+            yield step
+
+    monkeypatch.setattr(runner, "advance", signal_in_last_step)
+    out = tmp_path / "out"
+    assert cli.main(["run", "elastic_2d", "--out", str(out), "--quiet"]) == 0
+    assert "interrupted" not in capsys.readouterr().err
+    summary = _summary(out)
+    assert summary["completed"] and summary["steps"] == 4 and not summary.get("interrupted_by")
+
+
 def test_ctrl_c_still_stops_cleanly_after_gmsh_read_a_mesh(tmp_path):
     """gmsh's Python module resets SIGINT when imported and again when finalized; a scene on a
     Gmsh mesh read after gmsh was imported elsewhere still stops cleanly on Ctrl-C."""

@@ -192,6 +192,8 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
                 log.info("step %4d  t = %.4f  Newton its %d%s", step.step, step.time,
                          step.newton_iterations, active)
             interrupted = stop.agreed(comm) if stop is not None else None
+            if last:  # a signal during the last step came too late: the run is done
+                interrupted = None
             if checkpoints is not None and (interrupted or checkpoints.due(step.step)):
                 with _timed(record, out):
                     checkpoints.write(record, control, history, forces)
