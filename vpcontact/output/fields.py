@@ -135,8 +135,34 @@ def on_rank0(comm, action) -> None:
         raise OSError(failure)
 
 
+#: the 8 bytes an HDF5 file's superblock starts with (at 0, or after a user block of 512·2ⁿ)
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def _has_hdf5_signature(path: Path) -> bool:
+    """Whether ``path`` holds an HDF5 superblock where the format puts one (0, 512, 1024, …)."""
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as f:
+            offset = 0
+            while offset + len(HDF5_SIGNATURE) <= size:
+                f.seek(offset)
+                if f.read(len(HDF5_SIGNATURE)) == HDF5_SIGNATURE:
+                    return True
+                offset = 512 if offset == 0 else 2 * offset
+    except OSError:
+        return False
+    return False
+
+
 def _open_to_append(path: Path, comm) -> Optional[io.XDMFFile]:
-    """The XDMF file opened to append to, or None (on every rank) where it cannot be."""
+    """The XDMF file opened to append to, or None (on every rank) where it cannot be. A data
+    file without an HDF5 superblock (a run killed while writing it) is not handed to HDF5,
+    which would print its error stack to stderr before refusing it."""
+    readable = comm.bcast(_has_hdf5_signature(Path(path).with_suffix(".h5")) if comm.rank == 0
+                          else None, root=0)
+    if not readable:
+        return None
     try:
         file = io.XDMFFile(comm, str(path), "a")
     except RuntimeError:
