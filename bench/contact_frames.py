@@ -34,7 +34,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 from vpcontact.cli import configure_logging
-from benchlib import machine, save
+from benchlib import machine, mesh_size, output_file, positive_count, save
 from vpcontact.model import Elasticity, Perzyna, Signorini
 from vpcontact.solver import Loads, QuasistaticProblem, StepControl, advance, tag_facets, time_split
 
@@ -93,11 +93,12 @@ def measure(dim: int, n: int, degrees: float, rotate, steps: int, repeat: int) -
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--n2d", type=int, default=96, help="2-D mesh: 2n × n cells")
-    parser.add_argument("--n3d", type=int, default=12, help="3-D mesh: 2n × n × n cells")
-    parser.add_argument("--steps", type=int, default=8)
-    parser.add_argument("--repeat", type=int, default=2)
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results/contact_frames.json"))
+    parser.add_argument("--n2d", type=mesh_size(4, 2), default=96, help="2-D mesh: 2n × n cells")
+    parser.add_argument("--n3d", type=mesh_size(12, 3), default=12, help="3-D mesh: 2n × n × n cells")
+    parser.add_argument("--steps", type=positive_count, default=8)
+    parser.add_argument("--repeat", type=positive_count, default=2)
+    parser.add_argument("--out", type=output_file,
+                        default=str(Path(__file__).parent / "results/contact_frames.json"))
     args = parser.parse_args(argv)
     result = {"machine": machine(COMM), "steps": args.steps, "cases": {}}
     for dim, n, degrees in ((2, args.n2d, 30.0), (3, args.n3d, 40.0)):

@@ -49,7 +49,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine, save  # noqa: E402
+from benchlib import (check_steps, machine, mesh_size, output_file, positive_float,  # noqa: E402
+                      positive_or_inf, save)
 
 from vpcontact.paper import signorini as paper  # noqa: E402
 from vpcontact.solver import StepControl, advance  # noqa: E402
@@ -208,13 +209,14 @@ def measure(n: int, scheme: str, t0: float, sigma_y: float, variants) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--n", type=int, nargs="+", default=[4, 8])
+    parser.add_argument("--n", type=mesh_size(18, 3), nargs="+", default=[4, 8])
     parser.add_argument("--scheme", default="linearized", choices=["implicit", "linearized"])
-    parser.add_argument("--t0", type=float, default=0.06)
-    parser.add_argument("--sigma-y", type=float, default=paper.SIGMA_Y)
+    parser.add_argument("--t0", type=positive_float, default=0.06)
+    parser.add_argument("--sigma-y", type=positive_or_inf, default=paper.SIGMA_Y)
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
-    parser.add_argument("--out")
+    parser.add_argument("--out", type=output_file)
     args = parser.parse_args(argv)
+    check_steps(parser, "--t0", args.t0 / 0.02)
     comm = MPI.COMM_WORLD
     if comm.size != 1:
         raise SystemExit("field_split_parts.py runs serially")

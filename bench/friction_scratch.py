@@ -26,7 +26,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine, save  # noqa: E402
+from benchlib import check_cells, machine, output_file, positive_float, positive_int, save  # noqa: E402
 
 from vpcontact import scene as scenes  # noqa: E402
 from vpcontact.scene import build  # noqa: E402
@@ -60,10 +60,14 @@ def run(cells, k: float, friction: bool) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cells", type=int, nargs=2, default=[80, 20])
-    parser.add_argument("--k", type=float, default=0.025)
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "friction_scratch.json"))
+    parser.add_argument("--cells", type=positive_int, nargs=2, default=[80, 20])
+    parser.add_argument("--k", type=positive_float, default=0.025)
+    parser.add_argument("--out", type=output_file,
+                        default=str(Path(__file__).parent / "results" / "friction_scratch.json"))
     args = parser.parse_args(argv)
+    check_cells(parser, "--cells", 2 * args.cells[0] * args.cells[1])
+    if args.k > PRESS:  # (each phase needs a step of its own)
+        parser.error(f"--k must lie in (0, {PRESS}] (the press phase needs a step), got {args.k}")
     comm = MPI.COMM_WORLD
     run((8, 2), 0.25, True)  # warm-up: JIT of the forms
     run((8, 2), 0.25, False)

@@ -28,7 +28,7 @@ from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine, save  # noqa: E402
+from benchlib import check_cells, machine, output_file, positive_int, save  # noqa: E402
 
 from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain, Signorini  # noqa: E402
 from vpcontact.model.friction import Friction  # noqa: E402
@@ -68,10 +68,11 @@ def run(cells, friction, floor: str = "compliant") -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cells", type=int, nargs=2, default=[256, 64])
+    parser.add_argument("--cells", type=positive_int, nargs=2, default=[256, 64])
     parser.add_argument("--floor", default="compliant", choices=["compliant", "rigid"])
-    parser.add_argument("--out")
+    parser.add_argument("--out", type=output_file)
     args = parser.parse_args(argv)
+    check_cells(parser, "--cells", 2 * args.cells[0] * args.cells[1])
     comm = MPI.COMM_WORLD
     run((8, 2), None, args.floor)  # warm-up: JIT of the forms
     run((8, 2), Friction("coulomb", coefficient=0.3), args.floor)

@@ -25,7 +25,7 @@ import numpy as np
 from mpi4py import MPI
 
 import numpy_reference as ref
-from benchlib import machine, save
+from benchlib import machine, output_file, positive_count, positive_int, save
 from vpcontact import kernels
 
 E, NU, SIGMA_Y, MU_STAR, DT = 1e8, 0.3, np.sqrt(10.0), 200.0, 0.01
@@ -104,14 +104,13 @@ def _case(model: str, branch: str, points: int, repeats: int, rng) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--points", type=int, default=100_000)
-    parser.add_argument("--repeats", type=int, default=20,
+    parser.add_argument("--points", type=positive_int, default=100_000)
+    parser.add_argument("--repeats", type=positive_count, default=20,
                         help="best of this many C++ runs (of a quarter as many numpy runs): the "
                              "machine is shared, single runs vary by 2x")
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "kernel_throughput.json"))
+    parser.add_argument("--out", type=output_file,
+                        default=str(Path(__file__).parent / "results" / "kernel_throughput.json"))
     args = parser.parse_args(argv)
-    if args.points < 1 or args.repeats < 1:
-        parser.error("--points and --repeats must be >= 1")
     rng = np.random.default_rng(2026)
     cases = {f"{model}/{branch}": _case(model, branch, args.points, args.repeats, rng)
              for model in ("1d", "plane_stress", "3d") for branch in ("elastic", "plastic")}

@@ -24,7 +24,7 @@ import numpy as np
 from dolfinx import geometry
 from mpi4py import MPI
 
-from benchlib import machine, save
+from benchlib import check_steps, machine, mesh_size, output_file, positive_float, save
 from vpcontact import scene as scenes
 from vpcontact.solver import StepControl, advance
 
@@ -62,14 +62,16 @@ def run(n: int, formulation: str, T: float) -> dict:
             "wall_time_s": wall}
 
 
-def main() -> None:
+def main(argv=None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--sizes", type=int, nargs="+", default=[2, 3, 4, 6, 8])
+    parser.add_argument("--sizes", type=mesh_size(18, 3), nargs="+", default=[2, 3, 4, 6, 8])
     parser.add_argument("--formulations", nargs="+", default=["mixed", "p2", "p1"],
                         choices=tuple(FORMULATIONS))
-    parser.add_argument("--T", type=float, default=0.3)
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "locking_3d.json"))
-    args = parser.parse_args()
+    parser.add_argument("--T", type=positive_float, default=0.3)
+    parser.add_argument("--out", type=output_file,
+                        default=str(Path(__file__).parent / "results" / "locking_3d.json"))
+    args = parser.parse_args(argv)
+    check_steps(parser, "--T", args.T / 0.02)  # (the scene's k)
     comm = MPI.COMM_WORLD
     runs = []
     for formulation in args.formulations:

@@ -61,7 +61,7 @@ from dolfinx import fem, mesh as dmesh
 from dolfinx.fem.petsc import assemble_matrix, assemble_matrix_block, assemble_vector_block
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine  # noqa: E402
+from benchlib import key_value, machine, mesh_size, nonnegative_int, output_file  # noqa: E402
 
 E = 1e8
 G_PLASTIC = 1e3
@@ -479,16 +479,19 @@ def run_one(sys_: System, name: str, extra: dict | None = None) -> dict:
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--sizes", type=int, nargs="+", default=[2, 4, 6, 8])
-    ap.add_argument("--case", nargs="+", default=["plastic_x2"],
+    ap.add_argument("--sizes", type=mesh_size(18, 3), nargs="+", default=[2, 4, 6, 8])
+    ap.add_argument("--case", nargs="+", default=["plastic_x2"], metavar="CASE",
+                    choices=[c + i for c in ("plastic_x2", "plastic_all", "elastic_nu05")
+                             for i in ("", "_id")],
                     help="plastic_x2 | plastic_all | elastic_nu05, each optionally with _id")
     ap.add_argument("--solvers", nargs="+", default=["mumps", "fs_full_mass_jacobi",
                                                       "fs_lower_mass_jacobi", "gamg_monolithic"],
                     choices=list(SOLVERS))
-    ap.add_argument("--mumps-max-n", type=int, default=12, help="skip MUMPS above this n")
-    ap.add_argument("--monolithic-max-n", type=int, default=6, help="skip monolithic GAMG above")
-    ap.add_argument("--out", default=str(Path(__file__).resolve().parent / "results"
-                                         / "mixed_pc_prototype.json"))
+    ap.add_argument("--mumps-max-n", type=nonnegative_int, default=12, help="skip MUMPS above this n")
+    ap.add_argument("--monolithic-max-n", type=nonnegative_int, default=6,
+                    help="skip monolithic GAMG above")
+    ap.add_argument("--out", type=output_file, default=str(Path(__file__).resolve().parent
+                                                            / "results" / "mixed_pc_prototype.json"))
     ap.add_argument("--append", action="store_true",
                     help="merge into the existing JSON (replace rows with the same key)")
     ap.add_argument("--tag", default="", help="label stored with every row")
@@ -497,9 +500,16 @@ def main(argv=None) -> None:
     ap.add_argument("--form", choices=["dev", "lame", "dev_pmat"], default="dev",
                     help="dev: A = 2G dev ε:ε, p = mean stress (as briefed); lame: A = 2G ε:ε, "
                          "p̂ = p − (2/3)G div u, C = 1/(K − 2G/3)")
-    ap.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
+    ap.add_argument("--set", type=key_value, nargs="*", default=[], metavar="KEY=VALUE",
                     help="extra PETSc options (relative to the outer KSP) for every solver")
     args = ap.parse_args(argv)
+    if args.append and Path(args.out).exists():  # (read at the end, after all the runs)
+        try:
+            old = json.loads(Path(args.out).read_text())
+        except (OSError, ValueError) as err:
+            ap.error(f"--append: cannot read {args.out} as JSON ({err})")
+        if not isinstance(old, dict) or not isinstance(old.get("runs", []), list):
+            ap.error(f"--append: {args.out} is not a results file of this script (no list 'runs')")
     comm = MPI.COMM_WORLD
 
     extra = dict(kv.split("=", 1) for kv in args.set)

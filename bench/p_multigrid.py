@@ -42,7 +42,7 @@ from vpcontact.solver import linear, p_multigrid
 from vpcontact.solver.vi_linear import rigid_body_modes
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine, save  # noqa: E402
+from benchlib import machine, mesh_size, output_file, save  # noqa: E402
 
 E, NU, G_PLASTIC, RTOL = 1e8, 0.3, 1e3, 1e-8
 GAMG_U = {"fieldsplit_u_pc_type": "gamg", "fieldsplit_u_pc_gamg_threshold": 0.02,
@@ -144,12 +144,13 @@ def solve(comm, K, b, S, is_u, is_p, V, variant: str) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--sizes", type=int, nargs="*", default=[2, 4, 6, 8, 12])
+    parser.add_argument("--sizes", type=mesh_size(18, 3), nargs="*", default=[2, 4, 6, 8, 12])
     parser.add_argument("--forms", nargs="*", default=["dev", "herrmann"],
                         choices=["dev", "herrmann"])
     parser.add_argument("--variants", nargs="*", default=["gamg", "p_multigrid"],
                         choices=["gamg", "p_multigrid", "p_multigrid_chebyshev"])
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "p_multigrid.json"))
+    parser.add_argument("--out", type=output_file,
+                        default=str(Path(__file__).parent / "results" / "p_multigrid.json"))
     args = parser.parse_args(argv)
     comm = MPI.COMM_WORLD
     records = []

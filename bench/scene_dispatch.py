@@ -32,7 +32,7 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
 from vpcontact.cli import configure_logging
-from benchlib import machine, save
+from benchlib import check_cells, machine, output_file, positive_count, positive_int, save
 from vpcontact import scene as scenes
 from vpcontact.scene import build
 from vpcontact.solver import DEFAULT_OPTIONS
@@ -100,10 +100,12 @@ def time_linear_problem(scene, steps: int) -> float:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cells", type=int, nargs=2, default=[256, 64])
-    parser.add_argument("--steps", type=int, default=10)
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "scene_dispatch.json"))
+    parser.add_argument("--cells", type=positive_int, nargs=2, default=[256, 64])
+    parser.add_argument("--steps", type=positive_count, default=10)
+    parser.add_argument("--out", type=output_file,
+                        default=str(Path(__file__).parent / "results" / "scene_dispatch.json"))
     args = parser.parse_args(argv)
+    check_cells(parser, "--cells", 2 * args.cells[0] * args.cells[1])
     comm = MPI.COMM_WORLD
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(comm.bcast(tmp, root=0))

@@ -32,7 +32,7 @@ from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
 from vpcontact.cli import configure_logging
-from benchlib import machine, save
+from benchlib import check_steps, key_value, machine, mesh_size, output_file, positive_float, save
 from vpcontact.paper import signorini as paper
 from vpcontact.solver import DEFAULT_OPTIONS, time_split
 from vpcontact.solver import StepControl, advance
@@ -95,18 +95,19 @@ def _run(args, dt: float, options: dict, baselines: dict) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--n", type=int, default=8, help="cells across the beam (mesh 3n × n × n)")
-    parser.add_argument("--dt", type=float, nargs="+", default=[0.05, 0.02, 0.01],
+    parser.add_argument("--n", type=mesh_size(18, 3), default=8,
+                        help="cells across the beam (mesh 3n × n × n)")
+    parser.add_argument("--dt", type=positive_float, nargs="+", default=[0.05, 0.02, 0.01],
                         help="time steps to run (each over the whole interval)")
-    parser.add_argument("--t-final", type=float, default=1.0)
-    parser.add_argument("-o", dest="options", action="append", default=[], metavar="KEY=VALUE",
-                        help="PETSc option for the step's SNES")
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "signorini_step.json"))
+    parser.add_argument("--t-final", type=positive_float, default=1.0)
+    parser.add_argument("-o", dest="options", type=key_value, action="append", default=[],
+                        metavar="KEY=VALUE", help="PETSc option for the step's SNES")
+    parser.add_argument("--out", type=output_file,
+                        default=str(Path(__file__).parent / "results" / "signorini_step.json"))
     args = parser.parse_args(argv)
+    check_steps(parser, "--dt/--t-final", args.t_final / min(args.dt))
     comm = MPI.COMM_WORLD
 
-    if any("=" not in o for o in args.options):
-        parser.error("-o takes KEY=VALUE")
     options = dict(o.split("=", 1) for o in args.options)
     problem = paper.signorini_3d(3 * args.n, args.n, args.n, petsc_options=options)
     V = problem.V

@@ -29,7 +29,7 @@ from pathlib import Path
 from mpi4py import MPI
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine, save  # noqa: E402
+from benchlib import machine, mesh_size, output_file, relative_tolerance, save  # noqa: E402
 
 from vpcontact.paper import signorini as paper  # noqa: E402
 from vpcontact.solver import StepControl, advance  # noqa: E402
@@ -68,14 +68,16 @@ def traced(first_rtol: float | None, first_unprobed: bool, log: list) -> None:
     vi_linear.LaggedMultigrid._probed_krylov = probed
 
 
-def main() -> int:
+def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[1])
-    parser.add_argument("--n", type=int, default=8, help="3n×n×n cells (default 8)")
-    parser.add_argument("--first-rtol", type=float, help="the step's first solve's tolerance")
+    parser.add_argument("--n", type=mesh_size(18, 3), default=8, help="3n×n×n cells (default 8)")
+    parser.add_argument("--first-rtol", type=relative_tolerance,
+                        help="the step's first solve's tolerance, in (0, 1)")
     parser.add_argument("--first-unprobed", action="store_true",
                         help="no probe in the step's first solve")
-    parser.add_argument("--out", help="JSON file (default bench/results/solve_trace_n<n>.json)")
-    args = parser.parse_args()
+    parser.add_argument("--out", type=output_file,
+                        help="JSON file (default bench/results/solve_trace_n<n>.json)")
+    args = parser.parse_args(argv)
     comm = MPI.COMM_WORLD
     log: list = []
     traced(args.first_rtol, args.first_unprobed, log)

@@ -42,7 +42,8 @@ import numpy as np
 from mpi4py import MPI
 
 from vpcontact.cli import configure_logging
-from benchlib import machine, save
+from benchlib import (check_cells, check_steps, key_value, machine, mesh_size, output_file,
+                      positive_float, positive_int, positive_or_inf, save)
 
 WINDOWS = {2: (0.4, 0.5), 3: (0.3, 0.4)}  # timed interval per dimension [s]
 RUN_IN_STEP, STEP = 0.02, 0.01
@@ -160,31 +161,45 @@ def marginal_memory(records: list):
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--sizes2d", type=int, nargs="*", default=[16, 32, 64, 128])
-    parser.add_argument("--sizes3d", type=int, nargs="*", default=[4, 6, 8, 12, 16])
-    parser.add_argument("--ranks", type=int, default=2, help="ranks of the speed-up run (3-D)")
-    parser.add_argument("-o", dest="options", action="append", default=[], metavar="KEY=VALUE",
-                        help="PETSc option for the step's SNES")
-    parser.add_argument("--sigma-y", type=float, default=None,
+    parser.add_argument("--sizes2d", type=mesh_size(2, 2), nargs="*", default=[16, 32, 64, 128])
+    parser.add_argument("--sizes3d", type=mesh_size(18, 3), nargs="*", default=[4, 6, 8, 12, 16])
+    parser.add_argument("--ranks", type=positive_int, default=2,
+                        help="ranks of the speed-up run (3-D; 1: no speed-up run)")
+    parser.add_argument("-o", dest="options", type=key_value, action="append", default=[],
+                        metavar="KEY=VALUE", help="PETSc option for the step's SNES")
+    parser.add_argument("--sigma-y", type=positive_or_inf, default=None,
                         help="yield stress (default: the paper's √10; inf: an elastic body)")
-    parser.add_argument("--mu-star", type=float, default=None,
+    parser.add_argument("--mu-star", type=positive_float, default=None,
                         help="viscosity μ* (default: the paper's 200; larger: softer contrast)")
-    parser.add_argument("--mpi-size", type=int, default=8, help="n of the speed-up run (3n×n×n)")
+    parser.add_argument("--mpi-size", type=mesh_size(18, 3), default=8,
+                        help="n of the speed-up run (3n×n×n)")
     parser.add_argument("--formulation", choices=["displacement", "mixed"], default="displacement",
                         help="3-D: the paper's P1 (default) or Taylor–Hood P2–P1")
     parser.add_argument("--linear", choices=["auto", "direct", "iterative"], default="auto",
                         help="linear solver (vpcontact.linear_solvers)")
-    parser.add_argument("--window3d", nargs=2, type=float, default=list(WINDOWS[3]),
+    parser.add_argument("--window3d", nargs=2, type=positive_float, default=list(WINDOWS[3]),
                         metavar=("T0", "T1"), help="the 3-D test's timed interval [s] (the run-in "
                         "from t = 0 to T0 is untimed; default 0.3 0.4, the beam flowing)")
     parser.add_argument("--scheme", choices=["implicit", "linearized", "explicit"],
                         default="implicit", help="the law's time scheme (default: implicit Euler; "
                         "linearized: one linear problem per step)")
-    parser.add_argument("--single", nargs=2, type=int, metavar=("DIM", "N"), help=argparse.SUPPRESS)
-    parser.add_argument("--out", default=str(Path(__file__).parent / "results" / "step_cost.json"))
+    parser.add_argument("--single", nargs=2, type=positive_int, metavar=("DIM", "N"),
+                        help=argparse.SUPPRESS)
+    parser.add_argument("--out", type=output_file,
+                        default=str(Path(__file__).parent / "results" / "step_cost.json"))
     args = parser.parse_args(argv)
-    if any("=" not in o for o in args.options):
-        parser.error("-o takes KEY=VALUE")
+    t0, t1 = args.window3d
+    if not t0 < t1:
+        parser.error(f"--window3d: T0 must be < T1, got {t0:g} {t1:g}")
+    check_steps(parser, "--window3d", t0 / RUN_IN_STEP + (t1 - t0) / STEP)
+    if args.single:
+        dim, n = args.single
+        if dim not in (2, 3):
+            parser.error(f"--single: DIM must be 2 or 3, got {dim}")
+        check_cells(parser, "--single", 2 * n**2 if dim == 2 else 18 * n**3)
+    if args.ranks > 18 * args.mpi_size**3:  # (a process without cells cannot take part)
+        parser.error(f"--ranks {args.ranks}: more processes than the cells of --mpi-size "
+                     f"{args.mpi_size} ({18 * args.mpi_size**3})")
     if args.single:
         record = single(*args.single, dict(o.split("=", 1) for o in args.options), args.sigma_y,
                         args.mu_star, args.formulation, args.linear,

@@ -20,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from benchlib import machine, save  # noqa: E402
+from benchlib import check_steps, machine, positive_int, save  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 from vpcontact import scene as scenes  # noqa: E402
 from vpcontact import studies as study  # noqa: E402
@@ -28,15 +28,16 @@ from vpcontact import studies as study  # noqa: E402
 TARGET = 1e-5
 
 
-def main():
+def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--paper-min-r", type=float, default=0.0025)
-    parser.add_argument("--bdf2-levels", type=int, default=7, help="k = 0.1 / 2^j, j < levels")
-    args = parser.parse_args()
+    parser.add_argument("--bdf2-levels", type=positive_int, default=7,  # (0: NaN in the JSON)
+                        help="k = 0.1 / 2^j, j < levels")
+    args = parser.parse_args(argv)
     if not 0 < args.paper_min_r <= 0.1:  # (0 refined for ever)
         parser.error(f"--paper-min-r must lie in (0, 0.1], got {args.paper_min_r}")
-    if args.bdf2_levels < 1:  # (0 left nothing to fit: NaN in the JSON)
-        parser.error(f"--bdf2-levels must be >= 1, got {args.bdf2_levels}")
+    check_steps(parser, "--paper-min-r", 10.0 / args.paper_min_r)  # T = 10 s, k >= r
+    check_steps(parser, "--bdf2-levels", 100 * 2 ** min(args.bdf2_levels - 1, 64))
     scene = scenes.load(scenes.resolve("normal_compliance_1d"))
     grid = study.make_grid(scene, [10], 0.1, 10.0)
     exact = study.reference_samples(grid, study.EXACT["paper_1d"](scene))
