@@ -113,12 +113,17 @@ def key_value(text: str) -> str:
 
 
 def output_file(text: str) -> str:
-    """An argparse ``type=``: a file to write: not an existing folder, in a folder that exists."""
+    """An argparse ``type=``: a file to write: not an existing folder, nor under an existing
+    file (missing folders are made by :func:`save`)."""
     path = Path(text)
     if text == "" or path.is_dir():
         raise argparse.ArgumentTypeError(f"must name a file, not a folder, got {text!r}")
-    if not path.parent.is_dir():
-        raise argparse.ArgumentTypeError(f"the folder of {text!r} does not exist")
+    for parent in path.parents:
+        if parent.exists():
+            if not parent.is_dir():
+                raise argparse.ArgumentTypeError(f"{str(parent)!r} in {text!r} is a file, "
+                                                 "not a folder")
+            break
     return text
 
 

@@ -108,13 +108,16 @@ def test_bad_value_is_refused(monkeypatch, capsys, tmp_path, script, argv, optio
 @pytest.mark.parametrize("script", ["contact_frames", "step_cost", "mixed_pc_prototype",
                                     "solve_trace", "friction_step"])
 def test_bad_out_is_refused(monkeypatch, capsys, tmp_path, script):
-    """--out an existing folder, or a file in a folder that does not exist."""
+    """--out an existing folder, or a file under an existing file (a missing folder is made
+    when the result is saved)."""
     folder = tmp_path / "folder"
     folder.mkdir()
     refused(monkeypatch, capsys, script, ["--out", str(folder)], "--out")
     assert list(folder.iterdir()) == []
-    refused(monkeypatch, capsys, script, ["--out", str(tmp_path / "missing" / "r.json")], "--out")
-    assert not (tmp_path / "missing").exists()
+    (tmp_path / "plain").write_text("keep\n")
+    refused(monkeypatch, capsys, script, ["--out", str(tmp_path / "plain" / "sub" / "r.json")],
+            "--out")
+    assert (tmp_path / "plain").read_text() == "keep\n"
 
 
 def test_append_to_an_unreadable_file_is_refused(monkeypatch, capsys, tmp_path):
