@@ -311,6 +311,51 @@ def test_a_viewer_option_given_true_switches_it_on(shared_tmp_path, capfd):
             assert ("solve converged due to" in printed) == shown, printed
 
 
+def test_a_solver_option_nothing_reads_is_refused_at_its_line(shared_tmp_path, capsys):
+    """A misspelt PETSc option (``snes_linesearh_type``) or vpcontact option
+    (``vpcontact_stal_rtol``) was silently ignored and the run used the defaults. PETSc's
+    options database says which options the step solver's SNES, KSP and PC read when they were
+    set up: the others are refused there, each at its line, exit 2, nothing written; the
+    options that are read (``snes_rtol``, ``pc_factor_shift_type``) are not."""
+    extra = ('\n[solver.petsc_options]\nsnes_rtol = 1e-9\npc_factor_shift_type = "none"\n'
+             'snes_linesearh_type = "bt"\nvpcontact_stal_rtol = 1e-6\n')
+    path = _small("elastic_2d", shared_tmp_path, "[4, 2]", 1.0, 0.5, extra=extra)
+    out = shared_tmp_path / "misspelt_option"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 2
+    assert not out.exists()
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err
+        lines = path.read_text().splitlines()
+        at = {key: f"{path}:{lines.index(next(s for s in lines if s.startswith(key))) + 1}: "
+              f"solver.petsc_options.{key}: " for key in ("snes_linesearh_type",
+                                                           "vpcontact_stal_rtol")}
+        assert at["snes_linesearh_type"] + "PETSc never read this option" in err, err
+        assert at["vpcontact_stal_rtol"] + "not an option of vpcontact (did you mean " \
+            '"vpcontact_stall_rtol"?' in err, err
+        assert "snes_rtol:" not in err and "pc_factor_shift_type:" not in err, err
+
+
+def test_an_option_read_only_while_solving_that_nothing_read_is_reported(shared_tmp_path,
+                                                                         capsys):
+    """Options PETSc reads only while solving (viewers, at the end of a solve) cannot be judged
+    at set-up: one that no solve read (``snes_vieww``) ends the run with a warning naming it,
+    on stderr and in summary.json. Options of solvers this run never set up (``lagged_*``: the
+    VI's linear solver, here without contact; ``fieldsplit_*``: the iterative solver) and the
+    viewers that were read are not reported. (The misspelt viewer was silently ignored.)"""
+    extra = ('\n[solver.petsc_options]\nsnes_vieww = "ascii:/dev/null"\n'
+             'snes_view = "ascii:/dev/null"\nksp_converged_reason = "ascii:/dev/null"\n'
+             'lagged_pc_type = "lu"\nfieldsplit_u_ksp_type = "cg"\n')
+    path = _small("elastic_2d", shared_tmp_path, "[4, 2]", 1.0, 0.5, extra=extra)
+    out = shared_tmp_path / "unread_viewer"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    warnings = [w for w in _summary(out)["warnings"] if "solver option" in w]
+    assert len(warnings) == 1 and warnings[0].startswith(
+        f"PETSc never read the solver option snes_vieww ({path}:"), warnings
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err
+        assert "warning: PETSc never read the solver option snes_vieww" in err, err
+
+
 def test_a_quadratic_bar_writes_its_contact_history(shared_tmp_path):
     """The paper's 1-D bar with P2 displacements: its contact pressure, written as a P1 field,
     is gathered from the vertices of the one-component vector P2 space (whose coordinates

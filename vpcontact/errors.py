@@ -39,11 +39,15 @@ class SolverOptionError(InputError):
     Attributes:
         option: the option's name (as given, without the leading "-") when the refusal names
             its value, else None.
+        problems: each refused option's own message, when several are refused at once (e.g.
+            options PETSc never read); empty otherwise.
     """
 
-    def __init__(self, message: str, option: str | None = None):
+    def __init__(self, message: str, option: str | None = None,
+                 problems: dict[str, str] | None = None):
         super().__init__(message, key="solver.petsc_options")
         self.option = option
+        self.problems = dict(problems or {})
 
 
 class ObstacleOutOfReach(InputError):

@@ -107,6 +107,7 @@ class Session:
             error = Interrupted(record.interrupted, record.times[-1] if record.times else 0.0)
         warnings = list(record.warnings) if record is not None else []
         warnings += self._contact_warnings(history, record) if error is None else []
+        warnings += self._option_warnings() if error is None else []
         try:
             self._write_summary(record, wall, error, warnings)
         except OSError as err:
@@ -144,6 +145,16 @@ class Session:
                 f"({point}); check its contact table (gap, obstacle and motion) if contact "
                 "was expected")
         return warnings
+
+    def _option_warnings(self) -> list:
+        """The scene's PETSc options that the run's solves never read, though they would have
+        if PETSc knew them (a misspelt viewer, a ``mat_mumps_*`` the factorization did not
+        take; see :mod:`vpcontact.solver.option_reads`; collective)."""
+        solver = self.model.problem.solver
+        return [f"PETSc never read the solver option {key} "
+                f"({self.model.scene.where('solver.petsc_options.' + key)}) in this run's "
+                f"solves ({solver.solvers}): a misspelt name, or one these solvers do not "
+                "take; it had no effect" for key in solver.unread_options()]
 
     def _history(self) -> Optional[ContactHistory]:
         """Every contact part's nodes, when contact.csv or the figures are asked for."""

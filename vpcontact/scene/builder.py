@@ -83,6 +83,9 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
                                      time_scheme=scene.time.scheme)
         problem.check_held(_check_times(scene))
     except SolverOptionError as err:
+        if err.problems:  # several options, each at its line
+            raise scene.errors({f"solver.petsc_options.{option}": message
+                                for option, message in err.problems.items()}) from None
         known = err.option is not None and err.option in scene.solver.petsc_options
         raise scene.error("solver.petsc_options" + (f".{err.option}" if known else ""),
                           str(err)) from None

@@ -141,6 +141,13 @@ class Scene:
         report.add(path, message)
         return report.error()
 
+    def errors(self, problems: dict[str, str]) -> SceneError:
+        """:meth:`error` for several problems at once (key path → message), each located."""
+        report = Report(str(self.path), self.locator)
+        for path, message in problems.items():
+            report.add(path, message)
+        return report.error()
+
     def to_toml(self) -> str:
         """The resolved scene as TOML (all defaults written out); reading it gives an equal scene."""
         return write.dump(self)

@@ -88,7 +88,11 @@ class QuasistaticProblem:
         linear: the linear solver, "direct" (MUMPS), "iterative" (multigrid; a block
             preconditioner for the mixed formulation) or "auto" (by size; see
             :mod:`vpcontact.solver.linear`).
-        petsc_options: options for the SNES of each step.
+        petsc_options: options for the SNES of each step. One that PETSc (or vpcontact) never
+            reads is refused (:class:`~vpcontact.errors.SolverOptionError`) or, where that is
+            only known after solving, reported by :meth:`StepSolver.unread_options
+            <vpcontact.solver.step_solver.StepSolver.unread_options>`
+            (:mod:`vpcontact.solver.option_reads`).
         options_prefix: PETSc options prefix of that SNES.
         predictor: initial guess of each step's Newton iteration. "linear" extrapolates the last
             step's displacement increment (u_n + k_n/k_{n-1} (u_n - u_{n-1})); "none" starts
@@ -273,7 +277,7 @@ class QuasistaticProblem:
                                  constant_jacobian=constant_jacobian,
                                  jacobian_per_step=jacobian_per_step, variables=self.variables,
                                  nodal_terms=nodal_terms,
-                                 linear=linear)
+                                 linear=linear, given=tuple(petsc_options or {}))
         bounds = merged_bounds(self.u, self.contacts)
         if bounds is not None:
             self.solver.set_bounds(*bounds)

@@ -25,6 +25,8 @@ from vpcontact.model.extent import mesh_extent
 from vpcontact.errors import ConvergenceError, InputError, SolverOptionError
 from vpcontact.solver import linear as linear_solvers
 from vpcontact.solver import p_multigrid
+from vpcontact.solver.option_reads import (OptionReads, decided_at_setup, judged_after_solves,
+                                           unread_error)
 from vpcontact.solver.snes_options import (_SNES_REASON, DEFAULT_OPTIONS, _forget, reason_name,
                                           check_values, rejected_option, viewer_flags)
 from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
@@ -146,6 +148,9 @@ class StepSolver:
             (before the UFL Jacobian's assembly) and ``current(x)`` (friction on Signorini parts, the obstacle's normals,
             the sticking guess of friction on compliant parts;
             :class:`~vpcontact.model.nodal_terms.NodalTerm` has the defaults).
+        given: the names among ``petsc_options`` the user gave: those PETSc (or vpcontact)
+            never reads are refused at set-up where that can be decided then, else reported by
+            :meth:`unread_options` after the solves (:mod:`.option_reads`).
     """
 
     def __init__(self, fields, bcs: Sequence[fem.DirichletBCMetaClass],
@@ -154,7 +159,7 @@ class StepSolver:
                  point_forces: Optional[Callable[[], tuple]] = None,
                  constant_jacobian: bool = False, jacobian_per_step: bool = False,
                  variables=None,
-                 linear: str = "direct", nodal_terms: Sequence = ()):
+                 linear: str = "direct", nodal_terms: Sequence = (), given: Sequence[str] = ()):
         if not scale > 0:
             raise ValueError(f"scale must be > 0, got {scale}")
         self.scale = float(scale)
@@ -242,13 +247,16 @@ class StepSolver:
         petsc_options = viewer_flags(petsc_options or {})
         check_values(petsc_options)
         self._options = {**defaults, **petsc_options}
+        self._reads = OptionReads(key for key in given if key in self._options)
         try:
             self._read_options()
             self._setup(self.snes)
         except (PETSc.Error, ValueError) as err:
             _forget(self.prefix, self._options)
             raise rejected_option(err, petsc_options or {}) from None
+        self._reads.note(self.prefix)
         _forget(self.prefix, self._options)
+        self._refuse_unread(comm)
         self.lagged_lu: Optional[LaggedDirectSolve | LaggedMultigrid] = None
         self._aimed_solves = False  # Krylov tolerances set per Newton iteration (_converged)
         self._free_snes: Optional[PETSc.SNES] = None  # unconstrained Newton of a VI problem
@@ -320,6 +328,30 @@ class StepSolver:
                              f"{self._stagnation_its}")
         p_multigrid.check_options(self._options)
 
+    def _refuse_unread(self, comm) -> None:
+        """Refuse the user's options that nothing read at set-up, among those every reader of
+        has run by then (:func:`~.option_reads.decided_at_setup`; collective)."""
+        ksp = self.snes.getKSP()
+        #: the step's solver types as set up, e.g. ``SNES newtonls, KSP preonly, PC lu``
+        self.solvers = (f"SNES {self.snes.getType()}, KSP {ksp.getType()}, "
+                        f"PC {ksp.getPC().getType()}")
+        self._direct = (ksp.getType() == "preonly"
+                        and ksp.getPC().getType() in ("lu", "cholesky"))
+        unread = self._reads.unread(comm, lambda key: decided_at_setup(key, self._direct))
+        if unread:
+            own = [key for key in DEFAULT_OPTIONS if key.startswith("vpcontact_")]
+            raise unread_error(unread, self.solvers, own)
+
+    def unread_options(self) -> list[str]:
+        """The user's options that no solve read and that the run's solves would have read if
+        PETSc knew them (:func:`~.option_reads.judged_after_solves`); empty before any solve
+        ran with the options in PETSc's database. Collective."""
+        comm = self.u.function_space.mesh.comm
+        if not comm.allreduce(self._reads.solves, op=MPI.MAX):
+            return []
+        return self._reads.unread(comm, lambda key: not decided_at_setup(key, self._direct)
+                                  and judged_after_solves(key, self._direct))
+
     def _setup(self, snes: PETSc.SNES) -> None:
         snes.setFunction(self._residual, self._b)
         snes.setJacobian(self._jacobian, self._A)
@@ -360,6 +392,7 @@ class StepSolver:
         self._free_snes = PETSc.SNES().create(self.u.function_space.mesh.comm)
         self._free_snes.setOptionsPrefix(free_prefix)
         self._setup(self._free_snes)
+        self._reads.note(free_prefix)
         _forget(free_prefix, {**self._options, "snes_type": 0, "snes_linesearch_type": 0})
 
     def _embedded(self, vec_u: PETSc.Vec, fill: float) -> PETSc.Vec:
@@ -932,7 +965,12 @@ class StepSolver:
         # every iteration, which would replace it.
         lagged = snes.getKSP().getType() == "python"
         with options_in_database(snes.getOptionsPrefix(), {} if lagged else self._options):
-            snes.solve(None, self._x)
+            try:
+                snes.solve(None, self._x)
+            finally:
+                if not lagged:  # (before the options leave the database: see .option_reads)
+                    self._reads.note(snes.getOptionsPrefix())
+                    self._reads.solves += 1
         self.timings["snes"] += _time.perf_counter() - start
         self.timings["linear_solve"] += self._ksp_event.getPerfInfo()["time"] - ksp_start
         its = snes.getIterationNumber()
