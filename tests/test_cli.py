@@ -356,6 +356,46 @@ def test_an_option_read_only_while_solving_that_nothing_read_is_reported(shared_
         assert "warning: PETSc never read the solver option snes_vieww" in err, err
 
 
+_BETWEEN_VERTICES = "sqrt(abs(x[0] - 0.125) - 0.1)"  # finite at x[0] = 0, 0.25, ...; NaN between
+
+
+@pytest.mark.parametrize("name, extra, key, expected", [
+    ("elastic_2d", '\n[boundary.top]\nkind = "traction"\nplane = { axis = "y", value = 1.0 }\n'
+     f'traction = [0.0, "{_BETWEEN_VERTICES}"]\n', "boundary.top.traction[1]",
+     "is not finite at quadrature points"),
+    ("elastic_2d", f'\n[loads]\nbody_force = [0.0, "{_BETWEEN_VERTICES}"]\n',
+     "loads.body_force[1]", "is not finite at quadrature points"),
+    ("elastic_2d", '\n[discretization]\ndegree = 2\n\n[boundary.top]\nkind = "displacement"\n'
+     'plane = { axis = "y", value = 1.0 }\ndisplacement = [0.0, "1e-3/(x[0] - 0.125)"]\n',
+     "boundary.top.displacement[1]", "evaluates to inf at x = [0.125, 1.0]"),
+    ("scratch", "", "contact.friction.threshold", "must be finite and >= 0 at every node"),
+])
+def test_an_expression_singular_where_it_is_used_is_refused_at_its_line(
+        shared_tmp_path, capsys, name, extra, key, expected):
+    """Expressions checked at the mesh's vertices only: NaN at the quadrature points between
+    them (a traction, a body force: the first step "did not converge", DIVERGED_FNORM_NAN,
+    exit 1, outputs written), infinite at a P2 node (a prescribed displacement: an internal
+    error, exit 3), or a Tresca threshold 1/x[0] on a face through x[0] = 0 (±1e16 at the node
+    there, negative left of it: the run completed, dividing by zero). Now refused at the key's
+    line before anything is solved or written, exit 2."""
+    path = _small(name, shared_tmp_path, "[16, 4]", 0.2, 0.1, extra=extra)
+    if name == "scratch":
+        text = path.read_text().replace('friction = { type = "coulomb", coefficient = 0.2 }',
+                                        'friction = { type = "tresca", threshold = "1/x[0]" }')
+        assert "1/x[0]" in text
+        path = write_shared(path, text)
+    out = shared_tmp_path / f"singular_{key}"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 2
+    assert not out.exists()
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err
+        lines = path.read_text().splitlines()
+        word = key.split(".")[-1].split("[")[0]
+        line = max(i for i, s in enumerate(lines) if s.startswith((word, "friction"))) + 1
+        assert f"{path}:{line}: {key}: " in err and expected in err, err
+        assert "did not converge" not in err and "internal error" not in err, err
+
+
 def test_a_quadratic_bar_writes_its_contact_history(shared_tmp_path):
     """The paper's 1-D bar with P2 displacements: its contact pressure, written as a P1 field,
     is gathered from the vertices of the one-component vector P2 space (whose coordinates

@@ -29,7 +29,7 @@ from vpcontact.solver.loads import Loads, PointLoad
 from vpcontact.solver.problem import QuasistaticProblem
 from vpcontact.kernels.mandel import voigt_to_mandel_factors
 from vpcontact.scene.files import Scene
-from vpcontact.scene.finite import check_finite
+from vpcontact.scene.finite import check_assembled_loads, check_finite
 from vpcontact.scene.gmsh_files import gmsh_session
 from vpcontact.scene.specs import ObstacleShape
 from vpcontact.model.obstacle import rotation_matrix, shape_level_set
@@ -91,6 +91,9 @@ def build(scene: Scene, comm=MPI.COMM_WORLD) -> Model:
                           str(err)) from None
     except InputError as err:  # located at the key its raiser named (the mesh if none)
         raise scene.error(_scene_key(scene, err), str(err)) from None
+    if problem.V.ufl_element().degree() > 1:  # the nodes where values are interpolated
+        check_finite(scene, mesh, part_tags, facet_tags, nodes=problem.V)
+    check_assembled_loads(scene, problem, part_tags, facet_tags)
     _check_contact_output(scene, mesh, facet_tags, part_tags)
     _initial_state(scene, problem)
     return Model(scene, problem, facet_tags, part_tags)

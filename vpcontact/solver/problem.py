@@ -179,10 +179,15 @@ class QuasistaticProblem:
         x = ufl.SpatialCoordinate(mesh)
         ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
         external = []  # (f, v): the applied loads, whose size sets the residual's force scale
+        #: each load's (f, v) as a UFL form, by "body_force" or traction facet tag (for checks
+        #: of the values at its quadrature points: vpcontact.scene.finite)
+        self.load_terms: dict = {}
         if loads.body_force is not None:
-            external.append(ufl.dot(as_vector(loads.body_force(x, self.time), dim), v) * ufl.dx)
+            self.load_terms["body_force"] = ufl.dot(
+                as_vector(loads.body_force(x, self.time), dim), v) * ufl.dx
         for tag, traction in loads.tractions.items():
-            external.append(ufl.dot(as_vector(traction(x, self.time), dim), v) * ds(tag))
+            self.load_terms[tag] = ufl.dot(as_vector(traction(x, self.time), dim), v) * ds(tag)
+        external.extend(self.load_terms.values())
         for term in external:
             residual -= term
         self.equilibrium = residual  # (σ, ε(v)) - (f, v): reactions and contact forces
