@@ -356,6 +356,43 @@ def test_an_option_read_only_while_solving_that_nothing_read_is_reported(shared_
         assert "warning: PETSc never read the solver option snes_vieww" in err, err
 
 
+@pytest.mark.parametrize("linear", ["auto", "direct"])
+def test_a_krylov_option_under_auto_is_not_refused_on_a_small_mesh(shared_tmp_path, capsys,
+                                                                   linear):
+    """``ksp_rtol`` is meant for the iterative solver, which ``linear = "auto"`` picks only on
+    large meshes: on a small one (the direct solver) the run goes on and says the option was not
+    read; with ``linear = "direct"`` chosen it is refused at its line (it was refused under
+    ``auto`` too: a scene that ran on a fine mesh was refused on a coarse one)."""
+    extra = f'\n[solver]\nlinear = "{linear}"\n[solver.petsc_options]\nksp_rtol = 1e-8\n'
+    path = _small("elastic_2d", shared_tmp_path, "[4, 2]", 1.0, 0.5, extra=extra)
+    out = shared_tmp_path / f"krylov_option_{linear}"
+    code = cli.main(["run", str(path), "--out", str(out), "--quiet"])
+    err = capsys.readouterr().err
+    if linear == "direct":
+        assert code == 2 and not out.exists()
+        if MPI.COMM_WORLD.rank == 0:
+            assert "solver.petsc_options.ksp_rtol: PETSc never read this option" in err, err
+    else:
+        assert code == 0
+        warnings = [w for w in _summary(out)["warnings"] if "solver option" in w]
+        assert len(warnings) == 1 and "ksp_rtol" in warnings[0], warnings
+
+
+def test_an_initial_stress_infinite_at_one_process_s_points_is_refused_on_every_one(
+        shared_tmp_path, capsys):
+    """sigma0 infinite at the centroids of the first column of cells only (x = h/3, which no
+    sampled point of the scene check meets): refused at its line, exit 2, nothing written. On 2
+    processes the one without those cells waited for ever (the check was not collective)."""
+    path = _small("elastic_2d", shared_tmp_path, "[16, 4]", 1.0, 0.5,
+                  extra='\n[initial]\nsigma0 = ["1/(x[0] - 0.25/3)", 0.0, 0.0]\n')
+    out = shared_tmp_path / "sigma0_infinite"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 2
+    assert not out.exists()
+    if MPI.COMM_WORLD.rank == 0:
+        assert "initial.sigma0: sigma0 is not finite at some quadrature point" in \
+            capsys.readouterr().err
+
+
 _BETWEEN_VERTICES = "sqrt(abs(x[0] - 0.125) - 0.1)"  # finite at x[0] = 0, 0.25, ...; NaN between
 
 

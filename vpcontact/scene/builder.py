@@ -441,7 +441,8 @@ def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
         exprs = init.u0
         problem.u.interpolate(lambda x: np.vstack([np.broadcast_to(e.numpy(x), x.shape[1:])
                                                    for e in exprs]))
-        if not np.isfinite(problem.u.x.array).all():
+        comm = problem.mesh.comm  # (collective: the bad node may lie on one process only)
+        if comm.allreduce(not np.isfinite(problem.u.x.array).all(), op=MPI.LOR):
             raise scene.error("initial.u0", "u0 is not finite at some mesh node")
         st = problem.state
         st.view(st.strain_old)[:] = st.strain_at_points()
@@ -455,6 +456,7 @@ def _initial_state(scene: Scene, problem: QuasistaticProblem) -> None:
             return np.stack(cols, axis=1) * factors
 
         problem.set_initial_stress(sigma0)
-        if not np.isfinite(problem.state.stress.x.array).all():
+        if problem.mesh.comm.allreduce(not np.isfinite(problem.state.stress.x.array).all(),
+                                       op=MPI.LOR):
             raise scene.error("initial.sigma0", "sigma0 is not finite at some quadrature point")
 

@@ -12,12 +12,12 @@ An option can be judged only once everything that could read it has run. Two mom
 
 * **at set-up** (refused, before anything is written): ``vpcontact_*`` (vpcontact reads all of
   its own there), ``snes_*`` (SNESSetFromOptions, with its line search and type-specific
-  options), and, with the direct linear solver (KSP ``preonly``, PC ``lu``/``cholesky``),
-  ``ksp_*`` and ``pc_*``. Names with :data:`SOLVE_TIME_WORDS` (viewers, converged reasons,
+  options), and, where the scene chose the direct linear solver (``linear = "direct"``: KSP
+  ``preonly``, PC ``lu``/``cholesky``), ``ksp_*`` and ``pc_*``. Names with :data:`SOLVE_TIME_WORDS` (viewers, converged reasons,
   Jacobian tests, monitors) wait for a solve.
 * **after the run's solves** (a warning), when at least one solve ran with the options in the
-  database: the names above that wait for a solve, ``ksp_*``/``pc_*`` of the other linear
-  solvers, ``mat_*`` with the direct one (MUMPS reads ``mat_mumps_*`` at factorization), and
+  database: the names above that wait for a solve, ``ksp_*``/``pc_*`` otherwise (``auto``
+  may give a small mesh the direct solver and a large one the iterative one), ``mat_*`` with the direct one (MUMPS reads ``mat_mumps_*`` at factorization), and
   names of no prefix PETSc knows here (``snse_rtol``).
 
 Never judged: options of sub-solvers that are set up only in some runs or read under their own
@@ -78,7 +78,7 @@ def read_by_petsc(name: str) -> Optional[bool]:
 
 def decided_at_setup(key: str, direct: bool) -> bool:
     """Whether every reader of ``key`` has run once the step's SNES, KSP and PC have read their
-    options (``direct``: the linear solver is a factorization under ``preonly``)."""
+    options (``direct``: the scene chose a factorization under ``preonly``)."""
     if key.startswith("vpcontact_"):
         return True
     if any(word in key for word in SOLVE_TIME_WORDS):

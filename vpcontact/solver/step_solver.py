@@ -207,6 +207,7 @@ class StepSolver:
         self.snes = PETSc.SNES().create(comm)
         self.snes.setOptionsPrefix(self.prefix)
         mixed = len(fields.functions) > 1
+        self._linear_given = linear
         self.linear = linear_solvers.choose(linear, self._x.getSize(),
                                             "mixed" if mixed else "displacement",
                                             per_step=self.jacobian_per_step,
@@ -335,9 +336,13 @@ class StepSolver:
         #: the step's solver types as set up, e.g. ``SNES newtonls, KSP preonly, PC lu``
         self.solvers = (f"SNES {self.snes.getType()}, KSP {ksp.getType()}, "
                         f"PC {ksp.getPC().getType()}")
+        # ksp_/pc_ options are judged at set-up only where the user chose the direct solver:
+        # under "auto" they may be meant for the iterative one, which larger meshes get (a
+        # warning after the solves then says the direct solver did not read them)
         self._direct = (ksp.getType() == "preonly"
                         and ksp.getPC().getType() in ("lu", "cholesky"))
-        unread = self._reads.unread(comm, lambda key: decided_at_setup(key, self._direct))
+        self._direct_chosen = self._direct and self._linear_given == "direct"
+        unread = self._reads.unread(comm, lambda key: decided_at_setup(key, self._direct_chosen))
         if unread:
             own = [key for key in DEFAULT_OPTIONS if key.startswith("vpcontact_")]
             raise unread_error(unread, self.solvers, own)
@@ -349,7 +354,7 @@ class StepSolver:
         comm = self.u.function_space.mesh.comm
         if not comm.allreduce(self._reads.solves, op=MPI.MAX):
             return []
-        return self._reads.unread(comm, lambda key: not decided_at_setup(key, self._direct)
+        return self._reads.unread(comm, lambda key: not decided_at_setup(key, self._direct_chosen)
                                   and judged_after_solves(key, self._direct))
 
     def _setup(self, snes: PETSc.SNES) -> None:
