@@ -113,6 +113,23 @@ def test_coulomb_full_slip_carries_the_coefficient_times_the_normal_force(shared
     assert max(summary["newton_iterations"]) <= 6, summary["newton_iterations"]
 
 
+def test_a_rigid_floor_given_by_its_gap_carries_friction(shared_tmp_path):
+    """A Signorini part given by ``gap = 0`` (no obstacle) is the same rigid floor as the plane
+    obstacle: with friction it gives the same forces, the Coulomb ratio while sliding. Its
+    friction table was read and then dropped: the block slid frictionless, exit 0."""
+    forces = {}
+    for name, floor in (("gap_floor", "gap = 0.0\n"), ("plane_floor", PLANE_FLOOR)):
+        scene = write_shared(shared_tmp_path / f"{name}.toml", _signorini_dragged(floor))
+        out = shared_tmp_path / name
+        assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+        forces[name] = _forces(out)
+    gap, plane = forces["gap_floor"], forces["plane_floor"]
+    sliding = gap["t"] >= 0.7
+    assert np.allclose(-gap["contact_x"][sliding] / gap["contact_y"][sliding], 0.3, rtol=1e-8)
+    for key in ("contact_x", "contact_y"):
+        assert np.allclose(gap[key], plane[key], rtol=1e-10, atol=1e-12), key
+
+
 def test_tresca_full_slip_carries_the_threshold_times_the_length(shared_tmp_path):
     f = _run(shared_tmp_path, "tresca", 'friction = { type = "tresca", threshold = 2.0 }')
     sliding = f["t"] >= 0.7

@@ -160,7 +160,7 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     t.forbid("rotation", "only with an obstacle")
     t.forbid("force", "only with an obstacle")
     if kind == "signorini":
-        return ContactSpec(kind, boundary, gap=_gap(t, dim))
+        return ContactSpec(kind, boundary, gap=_gap(t, dim), friction=friction)
     return ContactSpec(kind, boundary, gap=_gap(t, dim), mu=t.number("mu", check=greater(0)),
                        alpha=t.number("alpha", 1.0, check=between(0.0, 1.0, "(]")),
                        friction=friction)
