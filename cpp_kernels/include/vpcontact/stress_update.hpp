@@ -509,20 +509,37 @@ void linearized_update(const Law& law, const Elasticity& elasticity, double dt,
     detail::linearized_point(law, dt, C, step, p);
 }
 
+/// Relative width of the band around the yield surface, in the yield function
+/// tau . Y tau / sigma_Y^2, whose points the linearized Perzyna step treats as
+/// in K (see linearized_update()).
+inline constexpr double linearized_yield_band = 1e-8;
+
 /// Linearly implicit step for Perzyna's law: as the generic one, with the
 /// elastic step (sigma^tr, tangent E) at points whose sigma_{n-1} lies in K,
-/// where G and its derivative vanish.
+/// where G and its derivative vanish — or lies outside it by less than
+/// linearized_yield_band. The step's tangent jumps at the yield surface (E
+/// inside, the soft plastic tangent outside); a stress that reached the surface
+/// at the end of the last step lies on either side of it by round-off and
+/// solver tolerance, so without the band mathematically equal stresses (a
+/// homogeneous state at several quadrature points) took different tangents and
+/// the solution lost its symmetry (README, "Design notes"). G there is of the
+/// band's size.
 template <int N>
 void linearized_update(const Perzyna<N>& law, const Elasticity& elasticity, double dt,
                        const StepArrays& step)
 {
   detail::check_step<N>(dt, step);
   const detail::Matrix<N> C = elasticity_matrix<N>(elasticity);
+  // (only where sigma_Y^2 neither overflows nor comes near the subnormal range: inside_bound)
+  const double banded = law.set.inside_bound > 0.0
+                            ? (1.0 + linearized_yield_band) * law.set.sigma_y * law.set.sigma_y
+                            : -1.0;
   for (std::size_t p = 0; p < step.num_points; ++p)
   {
     const detail::Vector<N> so = detail::load<N>(step.sigma_old + p * N);
     detail::Vector<N> tau;
-    if (law.set.clearly_inside(so) || project<N>(law.set, so.data(), tau.data()) == 0)
+    if (law.set.clearly_inside(so) || law.set.value(so.data()) <= banded
+        || project<N>(law.set, so.data(), tau.data()) == 0)
     {
       detail::Vector<N> en;
       detail::store(detail::trial_stress<N>(C, step, p, en), step.sigma_new + p * N);
