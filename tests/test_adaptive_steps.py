@@ -125,3 +125,42 @@ def test_steps_shrink_at_contact_onset():
     assert steps[window].min() < 0.7 * np.median(steps[window])
     assert any(onset - 0.02 < c.time < onset + 0.05 and c.reason == "ERROR_ESTIMATE"
                for c in control.cuts), control.cuts
+
+
+class _Ratchet:
+    """A stand-in problem whose steps fail above a limit that falls 8-fold with every accepted
+    step: each step is accepted after three cuts (fewer than max_cuts), so the cuts never
+    count up to max_cuts and k ratchets down."""
+
+    def __init__(self):
+        from types import SimpleNamespace
+        self.time = SimpleNamespace(value=0.0)
+        self.step_index = 0
+        self.limit = 0.1
+        self.calls = 0
+
+    def step(self, k, tolerance=None):
+        from vpcontact.errors import ConvergenceError
+        from vpcontact.solver.problem import StepReport
+        self.calls += 1
+        assert self.calls < 10_000, f"advance() did not stop (k = {k:g})"
+        if k > self.limit:
+            raise ConvergenceError("DIVERGED_LINE_SEARCH", 3, self.time.value + k,
+                                   self.step_index + 1)
+        self.time.value += k
+        self.step_index += 1
+        self.limit = k / 8
+        return StepReport(self.step_index, self.time.value, 3)
+
+
+def test_cuts_between_accepted_steps_stop_at_the_step_floor():
+    """Steps accepted after a few cuts each, the next one failing again lower down: the step
+    size fell towards round-off (a sweep's normal-compliance scene reached k ~ 1e-16, t + k = t,
+    and then failed writing two outputs at one time). It stops below 1e-8 k with an error
+    saying so."""
+    from vpcontact.errors import StepTooSmall
+    problem = _Ratchet()
+    with pytest.raises(StepTooSmall, match="the step size fell to"):
+        for _ in advance(problem, 1.0, StepControl(0.1)):
+            pass
+    assert problem.calls < 200

@@ -28,7 +28,8 @@ from typing import Optional
 from mpi4py import MPI
 
 from vpcontact.errors import (INTERNAL_ERROR, ConvergenceError, InputError, Interrupted,
-                              NonFiniteStateError, OutputError, StepRejected, VpcontactError)
+                              NonFiniteStateError, OutputError, StepRejected, StepTooSmall,
+                              VpcontactError)
 
 
 def main(argv: Optional[list] = None) -> int:
@@ -50,6 +51,11 @@ def main(argv: Optional[list] = None) -> int:
     except OutputError as err:
         _error(comm, f"{err}. The completed steps and the record were kept as far as they "
                      "could be written.")
+        return 1
+    except StepTooSmall as err:
+        _error(comm, f"the simulation failed: {err}. Smaller steps do not help there: look at "
+                     "the model's data (e.g. a nearly rate-independent law, a contact law "
+                     "without a derivative at touch-down) or the solver's tolerances.")
         return 1
     except (ConvergenceError, NonFiniteStateError, StepRejected) as err:
         _error(comm, f"the simulation failed: {err}. Try a smaller time step ([time] k), more "

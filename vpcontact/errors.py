@@ -94,6 +94,22 @@ class StepRejected(VpcontactError):
                          "times the tolerance")
 
 
+class StepTooSmall(VpcontactError):
+    """Halving the step after failures took it below the floor of
+    :func:`~vpcontact.solver.stepping.advance` (the run makes no progress in time there).
+
+    Attributes:
+        time: time t_{n−1} the steps started from.
+        step: the step size that would have been tried next.
+        last: the failure that asked for the cut.
+    """
+
+    def __init__(self, time: float, step: float, floor: float, last: Exception):
+        self.time, self.step, self.last = time, step, last
+        super().__init__(f"the step size fell to {step:.3g}, below {floor:.3g}, after repeated "
+                         f"failures from t = {time:.6g} (the last: {last})")
+
+
 class OutputError(VpcontactError, OSError):
     """An output could not be written (full disk, unwritable folder, a file in the way)."""
 

@@ -20,7 +20,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Iterator, Optional
 
-from vpcontact.errors import ConvergenceError, InputError, NonFiniteStateError, StepRejected
+from vpcontact.errors import (ConvergenceError, InputError, NonFiniteStateError, StepRejected,
+                              StepTooSmall)
 from vpcontact.solver.problem import QuasistaticProblem, StepReport
 
 
@@ -66,12 +67,18 @@ class StepControl:
             raise InputError(f"tolerance must be in (0, 1), got {self.tolerance}")
 
 
+#: Steps below this fraction of the nominal k are not tried: the run stops with
+#: :class:`~vpcontact.errors.StepTooSmall` (12 halvings in a row, the default, reach 2.4e−4).
+MIN_STEP_FRACTION = 1e-8
+
+
 def advance(problem: QuasistaticProblem, t_final: float, control: StepControl) -> Iterator[StepReport]:
     """Step ``problem`` from its current time to ``t_final``, yielding each accepted step.
 
     Raises:
         ConvergenceError, NonFiniteStateError or StepRejected: the step still failed after
             ``max_cuts`` consecutive cuts; the problem holds the last accepted state.
+        StepTooSmall: a cut would take the step below MIN_STEP_FRACTION of ``control.dt``.
     """
     if not t_final > float(problem.time.value):
         raise InputError(f"final time {t_final} must exceed the current time {float(problem.time.value)}")
@@ -87,6 +94,9 @@ def advance(problem: QuasistaticProblem, t_final: float, control: StepControl) -
     cuts_in_a_row = 0
     # Relative slack so that round-off in the accumulated time never leaves a sliver step.
     slack = 1e-9 * control.dt
+    # The smallest step tried: cuts that alternate with accepted steps (the count of cuts in a
+    # row starts again after each) could otherwise take k down to round-off, where t + k == t
+    floor = max(MIN_STEP_FRACTION * control.dt, 1e-12 * abs(t_final))
     while True:
         t = float(problem.time.value)
         remaining = t_final - t
@@ -101,6 +111,8 @@ def advance(problem: QuasistaticProblem, t_final: float, control: StepControl) -
             if cuts_in_a_row > control.max_cuts:
                 raise
             dt = k * _factor(rejected.ratio, rejected.order)
+            if dt < floor:
+                raise StepTooSmall(t, dt, floor, rejected) from rejected
             continue
         except (ConvergenceError, NonFiniteStateError) as error:
             reason = getattr(error, "reason", "NONFINITE_STATE")
@@ -109,6 +121,8 @@ def advance(problem: QuasistaticProblem, t_final: float, control: StepControl) -
             if cuts_in_a_row > control.max_cuts:
                 raise
             dt = k / 2
+            if dt < floor:
+                raise StepTooSmall(t, dt, floor, error) from error
             continue
         cuts_in_a_row = 0
         grow = 2.0 if report.newton_iterations <= control.easy_iterations else 1.0
