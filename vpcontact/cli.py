@@ -294,7 +294,10 @@ def _run(args, comm) -> int:
         for warning in result.warnings:
             print(f"warning: {warning}", file=sys.stderr)
         print(f"{result.name}: t = {result.final_time:.4g} in {result.steps} steps, "
-              f"{result.newton_iterations} Newton iterations, {result.rejected} rejected, "
+              f"{result.newton_iterations} Newton iterations"
+              + (f" ({result.newton_iterations_total} with the rejected steps')"
+                 if result.newton_iterations_total != result.newton_iterations else "")
+              + f", {result.rejected} rejected, "
               f"{result.wall_time:.1f} s on {result.ranks} rank(s); outputs in {result.out}")
     return 0
 

@@ -49,6 +49,8 @@ class SessionResult:
     newton_iterations: int
     rejected: int
     wall_time: float
+    #: the Newton iterations of the rejected steps too (summary.json's newton_iterations_total)
+    newton_iterations_total: int
     ranks: int
     out: Path
     warnings: tuple
@@ -126,6 +128,7 @@ class Session:
         self.comm.barrier()  # rank 0 has written every file
         return SessionResult(scene.name, record.times[-1], len(record.times),
                              sum(record.newton_iterations), len(record.cuts), wall,
+                             self.model.problem.solver.total_iterations,
                              self.comm.size, self.out.resolve(), tuple(warnings))
 
     def _contact_warnings(self, history: Optional[ContactHistory], record) -> list:
