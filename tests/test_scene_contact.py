@@ -442,3 +442,116 @@ def test_contact_nodes_whose_rays_miss_the_obstacle_get_no_contact(shared_tmp_pa
     assert np.abs(forces["whole"]).max() > 0
     np.testing.assert_allclose(forces["whole"], forces["restricted"], rtol=1e-8,
                                atol=1e-10 * np.abs(forces["restricted"]).max())
+
+
+LOADED_FLOOR = """\
+name = "loaded_floor"
+
+[mesh]
+type = "rectangle"
+lower = [0.0, 0.0]
+upper = [1.0, 0.5]
+cells = [8, 4]
+cell_type = "triangle"
+
+HOLD
+
+[boundary.bottom]
+kind = "contact"
+plane = { axis = "y", value = 0.0 }
+
+[loads]
+body_force = [0.0, "-2.0*t"]
+
+[material]
+E = 1000.0
+nu = 0.3
+plane = "strain"
+
+[contact]
+type = "LAW"
+boundary = "bottom"
+gap = GAP
+
+[time]
+T = 1.0
+k = 0.5
+
+[output]
+figures = false
+
+[[loads.point]]
+at = [0.5, 0.0]
+force = [0.0, "F*t"]
+"""
+
+#: a block pressed onto the floor by its weight, a traction on its top and a point load at a
+#: floor node; only a roller at x = 0 holds it besides the floor
+PRESSED = """\
+[boundary.left]
+kind = "symmetry"
+plane = { axis = "x", value = 0.0 }
+
+[boundary.top]
+kind = "traction"
+plane = { axis = "y", value = 0.5 }
+traction = [0.0, "-1.0*t"]"""
+
+#: a block hung from its clamped top whose point load pulls a floor node away from the floor;
+#: a second point load at a clamped node is carried by the clamp
+PULLED = """\
+[boundary.top]
+kind = "clamped"
+plane = { axis = "y", value = 0.5 }
+
+[[loads.point]]
+at = [0.5, 0.5]
+force = ["1.0*t", 0.0]"""
+
+
+@pytest.mark.parametrize("law", ["signorini", "normal_compliance"])
+def test_point_load_at_a_contact_node_is_not_contact_force(shared_tmp_path, capsys, law):
+    """A point load at a node of a contact part is an applied load like f_0 and f_2, not a force
+    of the obstacle or foundation. Pressed onto the floor by its weight (1), a traction on its top
+    (1) and a point load of 0.5 at a floor node, the block's contact force is 2.5, balancing
+    them, and the loaded node has the most compressive pressure, about its load over its share of
+    the floor (0.125); with the point load pulling the node away from a floor it never touches,
+    the contact force and pressures are 0 (Signorini: to round-off). A point load at a clamped
+    node is the clamp's to carry. (The residual at the loaded node was reported as contact force
+    and pressure: 2.0 and a tensile pressure at the loaded node; 1e3 and −8e3 from a floor never
+    touched; and the clamp's reaction left the point load out.)"""
+    laws = {"signorini": "", "normal_compliance": "\nmu = 1e-4"}
+    base = LOADED_FLOOR.replace("LAW", law).replace("gap = GAP", "gap = GAP" + laws[law])
+    pressed = base.replace("HOLD", PRESSED).replace("GAP", "0.0").replace("F*t", "-0.5*t")
+    pulled = base.replace("HOLD", PULLED).replace("GAP", "0.005").replace("F*t", "1e3*t")
+    for name, text in (("pressed", pressed), ("pulled", pulled)):
+        scene = write_shared(shared_tmp_path / f"{name}.toml", text)
+        out = shared_tmp_path / name
+        assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+        header, rows = _csv(out / "reactions.csv")
+        final = dict(zip(header, rows[-1]))
+        contact = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
+        last = contact[contact[:, 0] == 1.0]  # t, x, y, z, u_normal, gap, clearance, pressure
+        loaded = last[np.isclose(last[:, 1], 0.5)][0]
+        warnings = json.loads((out / "summary.json").read_text())["warnings"]
+        capsys.readouterr()
+        if name == "pressed":
+            assert final["contact_y"] == pytest.approx(2.5, rel=1e-6)
+            assert abs(final["contact_x"]) < 1e-9
+            assert warnings == []
+            assert loaded[7] == last[:, 7].min()
+            assert -loaded[7] == pytest.approx(0.5 / 0.125 + 2.0, rel=0.3)
+            # the lumped pressures add up to the contact force (P1: nodal shares h, h/2)
+            shares = np.where(np.isclose(last[:, 1], 0.0) | np.isclose(last[:, 1], 1.0),
+                              0.0625, 0.125)
+            assert -np.dot(shares, last[:, 7]) == pytest.approx(2.5, rel=1e-6)
+        else:
+            assert len(warnings) == 1 and "never touched" in warnings[0], warnings
+            assert final["top_y"] == pytest.approx(-(1e3 - 2.0 * 0.5), rel=1e-9)
+            assert final["top_x"] == pytest.approx(-1.0, rel=1e-9)
+            if law == "normal_compliance":  # the foundation's law: exactly 0 off contact
+                assert final["contact_x"] == 0.0 and final["contact_y"] == 0.0
+                assert np.all(contact[:, 7] == 0.0)
+            else:  # the residual at inactive nodes: round-off of the forces
+                assert abs(final["contact_x"]) + abs(final["contact_y"]) < 1e-9 * 1e3
+                assert np.abs(contact[:, 7]).max() < 1e-9 * 1e3 / 0.125

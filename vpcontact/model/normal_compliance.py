@@ -186,6 +186,7 @@ class CompliancePart:
         blocks = fem.locate_dofs_topological(V, V.mesh.topology.dim - 1, facet_tags.find(law.tag))
         blocks = blocks[blocks < V.dofmap.index_map.size_local]
         bs = V.dofmap.index_map_bs
+        self.facet_blocks = blocks  # this rank's owned nodes of Γ3 (none excluded)
         self.force_dofs = unrolled(bs, blocks, exclude)
         self.node_blocks = np.unique(self.force_dofs // bs).astype(np.int32)
         self._nodes = None

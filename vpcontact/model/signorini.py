@@ -369,7 +369,9 @@ class ContactMonitor:
     """Nodal σ_ν on Γ3 from the equilibrium residual R(u) = (σ, ε(v)) - (f, v) at the solution.
 
     At a contact node i, ν_i · R_i = ∫_Γ3 σ_ν φ_i da (R_i the block of the node's components),
-    so the nodal contact pressure is σ_ν,i = ν_i · R_i / ∫_Γ3 φ_i da (lumped).
+    so the nodal contact pressure is σ_ν,i = ν_i · R_i / ∫_Γ3 φ_i da (lumped). A point load P
+    at a contact node is an applied force like f: R − P is the obstacle's force there
+    (:meth:`set_point_loads`).
 
     For P2 the lumped weights fail: a vertex function of P2 integrates to zero over a triangle.
     The residual is then also tested with the P1 hat functions (each one a combination of P2
@@ -395,6 +397,27 @@ class ContactMonitor:
         self._vertices = None
         if V.ufl_element().degree() > 1:
             self._vertices = _VertexPressure(V, equilibrium_form, facet_tags, tag, cdofs)
+        self._points = None  # (PointDofs, time Constant): the point loads, subtracted from R
+
+    def set_point_loads(self, points, time: fem.Constant) -> None:
+        """Subtract the point loads ``points`` (:class:`~vpcontact.solver.loads.PointLoad`,
+        F at ``time``) from the residual: they are applied forces, not the obstacle's
+        (collective)."""
+        from vpcontact.solver.loads import PointDofs
+        V = self.u.function_space
+        self._points = ([PointDofs(V, p) for p in points], time)
+        if self._vertices is not None:
+            self._vertices.set_point_loads(V, points, time)
+
+    def _subtract_point_loads(self, vec: PETSc.Vec) -> None:
+        """R − P on this rank's owned entries of the assembled (ghost-updated) ``vec``."""
+        if self._points is None:
+            return
+        loads, time = self._points
+        t = float(time.value)
+        array = vec.array
+        for load in loads:
+            array[load.dofs] -= load.values(t)
 
     def nodal_pressure(self) -> np.ndarray:
         """σ_ν at the contact nodes (lumped; P2: through the vertices, see the class docstring)."""
@@ -408,6 +431,7 @@ class ContactMonitor:
             local.set(0.0)
         fem.petsc.assemble_vector(self._vec, self._form)
         self._vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        self._subtract_point_loads(self._vec)
         return self.cdofs.normal_component(self._vec.array)
 
     def report(self, active_tol: float = 1e-10) -> ContactReport:
@@ -473,12 +497,52 @@ class _VertexPressure:
                                    dtype=np.int32)
         scalar_of_block[np.asarray(to_parent) // bs] = np.arange(len(to_parent), dtype=np.int32)
         self._at = scalar_of_block[cdofs.nodes]
+        self._V1 = V1
+        self._points = None  # (local V1 dofs incl. ghosts, (n, bs) weights, loads, time)
+
+    def set_point_loads(self, V, points, time: fem.Constant) -> None:
+        """The point loads tested with the P1 hat functions: a load F at a node x_p of V
+        gives φ¹_a(x_p) F at the vertices a of a cell around x_p (F at a vertex, F/2 at the
+        ends of an edge whose midpoint it is, …); found by the rank that owns the node."""
+        from vpcontact.solver.loads import PointDofs
+        V1, bs = self._V1, self._bs
+        mesh = V.mesh
+        tdim = mesh.topology.dim
+        num_cells = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
+        dofmap = V.dofmap.list.array.reshape(num_cells, -1)
+        dofmap1 = V1.dofmap.list.array.reshape(num_cells, -1)
+        coordinates = V.tabulate_dof_coordinates()
+        hat = fem.Function(fem.FunctionSpace(mesh, ("Lagrange", 1)))
+        rows, weights, loads = [], [], []
+        for point in points:
+            load = PointDofs(V, point)
+            if len(load.dofs) == 0:
+                continue
+            block = load.dofs[0] // bs
+            cell = int(np.flatnonzero((dofmap == block).any(axis=1))[0])
+            x = coordinates[block].reshape(1, 3)
+            for a in dofmap1[cell]:
+                hat.x.array[:] = 0.0
+                hat.x.array[a] = 1.0
+                w = float(hat.eval(x, np.array([cell], dtype=np.int32))[0])
+                if abs(w) > 1e-12:
+                    rows.append(a)
+                    weights.append(w)
+                    loads.append(load)
+        self._points = (np.array(rows, dtype=np.int32), np.array(weights), loads, time)
 
     def pressure(self) -> np.ndarray:
         vec = self._vec
         with vec.localForm() as local:
             local.set(0.0)
         fem.petsc.assemble_vector(vec, self._form)
+        if self._points is not None:  # R − P, tested with the P1 hats (before the ghosts add)
+            rows, weights, loads, time = self._points
+            t = float(time.value)
+            with vec.localForm() as local:
+                array = local.array
+                for a, w, load in zip(rows, weights, loads):
+                    array[a * self._bs:(a + 1) * self._bs] -= w * load.values(t)
         vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
         blocks = vec.array.reshape(-1, self._bs)[self._vertices]
         self._p1.x.array[:] = 0.0

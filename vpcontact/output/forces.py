@@ -3,7 +3,9 @@
 
 At every recorded time: the force each Dirichlet part exerts on the body (its reaction, summed
 component by component over the part's prescribed dofs) and the force of each contact part's
-obstacle or foundation, all from the equilibrium residual (see :mod:`vpcontact.solver.dirichlet`).
+obstacle or foundation, from the equilibrium residual less the applied loads (point loads
+included; a normal-compliance part's from its law: see :meth:`~vpcontact.solver.problem.
+QuasistaticProblem.support_forces`).
 With the applied loads they balance: Σ reactions + Σ contact forces + ∫f_0 + ∫f_2 + point loads
 = 0. ``reactions.csv`` has a column per Dirichlet part and component (``<part>_x`` …), the total
 contact force (``contact_x`` …) and, when the scene has several contact parts, each part's

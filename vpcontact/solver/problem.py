@@ -38,7 +38,7 @@ from vpcontact.model.fields import Displacement, DisplacementPressure
 from vpcontact.model.locking import check_formulation, locks
 from vpcontact.model.quadrature import QuadratureState
 from vpcontact.model.frames import rotation_matrix
-from vpcontact.model.contact import merged_bounds, merged_frames, merged_report
+from vpcontact.model.contact import merged_bounds, merged_frames, merged_report, unrolled
 from vpcontact.solver.bdf2 import Bdf2, check_time_scheme
 from vpcontact.solver.dirichlet import Dirichlet, DirichletParts, rigid_mode_values
 from vpcontact.solver.loads import Loads, PointDofs, as_vector
@@ -234,7 +234,23 @@ class QuasistaticProblem:
             # friction: 1 145 Newton iterations with l2, 680 with cp, in 29 / 22 steps)
             defaults["snes_linesearch_type"] = "cp"
         normal = ufl.FacetNormal(mesh)
-        terms = [t for t in (p.terms(self.u, du, v, normal, ds) for p in self.contacts) if t]
+        terms = []
+        # A compliance part's force is its law's: the part's own term R_c, assembled at its
+        # nodes (exactly 0 where nothing penetrates), not the residual left there.
+        self._compliance_forces: dict = {}  # part index -> (form, owned dofs, vector)
+        held_dofs = self.dirichlet.prescribed
+        for part in self.contacts:
+            if part.bounded:
+                held_dofs = np.union1d(held_dofs, part.force_dofs)
+        for i, part in enumerate(self.contacts):
+            term = part.terms(self.u, du, v, normal, ds)
+            if not term:
+                continue
+            terms.append(term)
+            if not part.bounded:
+                form = fem.form(term[0])
+                dofs = unrolled(dim, part.facet_blocks, held_dofs)
+                self._compliance_forces[i] = (form, dofs, fem.petsc.create_vector(form))
         # A body whose free rigid motions only its contacts hold (see vpcontact.solver.held).
         self.held = None
         if free:
@@ -258,6 +274,9 @@ class QuasistaticProblem:
         # scheme on a cantilever deflecting by 1e-2 of its length: DIVERGED_MAX_IT). Ten extents.
         options = {"snes_linesearch_maxstep": 10.0 * extent / scale, **options}
         self._point_loads = [PointDofs(self.V, p) for p in loads.points]
+        for part in self.contacts:  # a point load at a contact node is not the obstacle's force
+            if part.bounded and self._point_loads:
+                part.monitor.set_point_loads(loads.points, self.time)
         # Only what is called for: a constitutive update linear in ε with no compliance term
         # has a Jacobian that changes with the step size only; it is factorized once per size.
         # (an obstacle driven by a force changes the unknowns' map P at every step)
@@ -613,7 +632,8 @@ class QuasistaticProblem:
         Dirichlet part exerts on the body, shape (parts, dim), and the total force of the
         obstacles and foundations, shape (dim,) (zero without contact) — with ``per_part`` each
         contact part's, shape (contact parts, dim) —, from the equilibrium residual
-        (σ, ε(v)) - (f, v) (see :mod:`vpcontact.solver.dirichlet`).
+        (σ, ε(v)) - (f, v) - P, P the point loads (see :mod:`vpcontact.solver.dirichlet`;
+        a compliance part's from its own term, :meth:`_contact_forces`)
 
         With ``split``, a third item: each contact part's force split along the body's outward
         normals ν_i at its nodes, shape (contact parts, 2): the normal force N = −Σ_i f_i·ν_i
@@ -624,23 +644,39 @@ class QuasistaticProblem:
         values = self._equilibrium_values()
         reactions = self.dirichlet.reactions(values)
         dim = self.V.dofmap.index_map_bs
-        local = np.zeros((len(self.contacts), dim))
-        for i, part in enumerate(self.contacts):
-            np.add.at(local[i], part.force_dofs % dim, values[part.force_dofs])
+        parts = self._contact_forces(values)
+        local = np.array([f.reshape(-1, dim).sum(axis=0) for f in parts]).reshape(-1, dim)
         forces = self.mesh.comm.allreduce(local, op=MPI.SUM)
         result = (reactions, forces if per_part else forces.sum(axis=0))
-        return result + (self._normal_and_tangential(values),) if split else result
+        return result + (self._normal_and_tangential(parts),) if split else result
 
-    def _normal_and_tangential(self, values: np.ndarray) -> np.ndarray:
-        """The ``split`` of :meth:`support_forces` from the equilibrium residual ``values``."""
+    def _contact_forces(self, values: np.ndarray) -> list[np.ndarray]:
+        """Each contact part's force on the body at this rank's owned dofs (0 elsewhere), from
+        the residual ``values`` of :meth:`_equilibrium_values` (bounded parts: the multiplier
+        of the bound, applied loads left out) or from the part's compliance term (collective)."""
+        forces = []
+        for i, part in enumerate(self.contacts):
+            f = np.zeros(values.size)
+            if i in self._compliance_forces:
+                form, dofs, vec = self._compliance_forces[i]
+                with vec.localForm() as local:
+                    local.set(0.0)
+                fem.petsc.assemble_vector(vec, form)
+                vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+                f[dofs] = 0.0 - vec.array[dofs]  # (R_c is the body's push on the foundation)
+            else:
+                f[part.force_dofs] = values[part.force_dofs]
+            forces.append(f)
+        return forces
+
+    def _normal_and_tangential(self, parts: list[np.ndarray]) -> np.ndarray:
+        """The ``split`` of :meth:`support_forces` from each part's nodal forces ``parts``."""
         dim = self.V.dofmap.index_map_bs
         local = np.zeros((len(self.contacts), 1 + dim))
         for i, part in enumerate(self.contacts):
             nodes = part.nodes
-            counted = np.zeros(values.size, dtype=bool)
-            counted[part.force_dofs] = True
             at = nodes.nodes[:, None] * dim + np.arange(dim)
-            f = np.where(counted[at], values[at], 0.0)
+            f = parts[i][at]
             normal = np.einsum("ij,ij->i", f, nodes.normals)
             local[i, 0] = 0.0 - normal.sum()  # (0, not -0, where nothing touches)
             local[i, 1:] = (f - normal[:, None] * nodes.normals).sum(axis=0)
@@ -648,8 +684,10 @@ class QuasistaticProblem:
         return np.column_stack([total[:, 0], np.linalg.norm(total[:, 1:], axis=1)])
 
     def _equilibrium_values(self) -> np.ndarray:
-        """The equilibrium residual (σ, ε(v)) − (f, v) at the current state, this rank's
-        entries (collective)."""
+        """The equilibrium residual (σ, ε(v)) − (f, v) − P at the current state, P the point
+        loads, this rank's owned entries (collective): at a node held by a support or an
+        obstacle, the force that holds it (a point load there is an applied force, not a
+        reaction)."""
         if self._equilibrium_vec is None:
             self._equilibrium_vec = fem.petsc.create_vector(self._equilibrium_form)
         vec = self._equilibrium_vec
@@ -657,7 +695,12 @@ class QuasistaticProblem:
             local.set(0.0)
         fem.petsc.assemble_vector(vec, self._equilibrium_form)
         vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return vec.array
+        values = vec.array
+        if self._point_loads:
+            values = values.copy()
+            dofs, forces = self._point_forces()
+            np.add.at(values, dofs, -forces)  # (owned dofs: each load on one rank)
+        return values
 
     @property
     def contact_names(self) -> list[str]:
