@@ -447,6 +447,22 @@ def test_the_linearized_step_far_into_its_stiff_range_is_warned(shared_tmp_path,
         assert found[0].startswith("k E/mu* = 2.5e+08") and 'scheme = "implicit"' in found[0]
 
 
+@pytest.mark.parametrize("traction, warned", [("-1", False), ("-1e4", True)])
+def test_a_run_beyond_small_strains_is_warned(shared_tmp_path, traction, warned):
+    """The elastic cantilever bent by 10⁴ times its own end load: bending strains of about 2
+    (200 %) in a small-strain model. A sweep's blocks squeezed to 400 % finished without a word;
+    such a run now ends with a warning (its own load: 2e-4, none)."""
+    path = _small("elastic_2d", shared_tmp_path, "[16, 4]", 1.0, 0.5)
+    text = path.read_text().replace('traction = [0.0, "-t"]',
+                                    f'traction = [0.0, "{traction}*t"]')
+    assert text != path.read_text()
+    path = write_shared(shared_tmp_path / f"strained_{traction}.toml", text)
+    out = shared_tmp_path / f"strained_{traction}"
+    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    found = [w for w in _summary(out)["warnings"] if "small-strain" in w]
+    assert bool(found) == warned, _summary(out)["warnings"]
+
+
 _BETWEEN_VERTICES = "sqrt(abs(x[0] - 0.125) - 0.1)"  # finite at x[0] = 0, 0.25, ...; NaN between
 
 
