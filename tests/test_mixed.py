@@ -77,6 +77,26 @@ def _lateral_strain(problem, axis: int) -> float:
     return float(values[0])
 
 
+def _steps_with_reference(problem, law, ramp, dim: int, steps: int):
+    """Steps of k = 0.1 of the cube pulled by ``ramp`` along x: after each, σ_h at the
+    quadrature points and the reference, the kernel at one point driven by the strain the body
+    took (Mandel, 3-D)."""
+    size = 6
+    s_ref, e_ref = np.zeros((1, size)), np.zeros((1, size))
+    reference = law.law if dim == 2 else law
+    for _ in range(steps):
+        problem.step(0.1)
+        e_new = np.zeros((1, size))
+        e_new[0, 0] = ramp(float(problem.time.value))
+        e_new[0, 1] = _lateral_strain(problem, 1)
+        if dim == 3:
+            e_new[0, 2] = _lateral_strain(problem, 2)
+        s_new = np.zeros((1, size))
+        reference.update(s_ref, e_ref, e_new, 0.1, s_new, None)
+        s_ref, e_ref = s_new, e_new
+        yield stress_at_points(problem), s_ref
+
+
 @pytest.mark.parametrize("formulation,degree", FORMULATIONS)
 @pytest.mark.parametrize("dim", [2, 3])
 def test_uniaxial_relaxation_is_homogeneous_in_every_formulation(dim, formulation, degree):
@@ -90,22 +110,7 @@ def test_uniaxial_relaxation_is_homogeneous_in_every_formulation(dim, formulatio
     ramp = lambda t: 2e-3 * min(t / 0.5, 1.0)  # noqa: E731
     problem = QuasistaticProblem(msh, tags, law, dirichlet=_pushed(dim, [0], ramp),
                                  formulation=formulation, degree=degree)
-    # reference: the kernel at one point, driven by the strain the body took at each step
-    size = 6
-    s_ref, e_ref = np.zeros((1, size)), np.zeros((1, size))
-    reference = law.law if dim == 2 else law
-    for _ in range(10):
-        problem.step(0.1)
-        t = float(problem.time.value)
-        e_new = np.zeros((1, size))
-        e_new[0, 0] = ramp(t)
-        e_new[0, 1] = _lateral_strain(problem, 1)
-        if dim == 3:
-            e_new[0, 2] = _lateral_strain(problem, 2)
-        s_new = np.zeros((1, size))
-        reference.update(s_ref, e_ref, e_new, 0.1, s_new, None)
-        s_ref, e_ref = s_new, e_new
-        sigma = stress_at_points(problem)
+    for sigma, s_ref in _steps_with_reference(problem, law, ramp, dim, 10):
         scale = abs(s_ref[0, 0])
         assert np.abs(sigma - sigma[0]).max() <= 1e-8 * scale, "the stress must be uniform"
         in_plane = [0, 1] + ([2] if dim == 3 else [])
@@ -144,22 +149,8 @@ def test_the_linearized_scheme_keeps_a_state_homogeneous_that_reaches_yield_at_a
         ramp = lambda t: sigma_y / np.sqrt(1 - NU + NU * NU) * (1 - NU * NU) / E * t / 0.1  # noqa
     problem = QuasistaticProblem(msh, tags, law, dirichlet=_pushed(dim, [0], ramp),
                                  formulation=formulation, degree=degree)
-    size = 6
-    s_ref, e_ref = np.zeros((1, size)), np.zeros((1, size))
-    reference = law.law if dim == 2 else law
     history = []
-    for _ in range(4):
-        problem.step(0.1)
-        t = float(problem.time.value)
-        e_new = np.zeros((1, size))
-        e_new[0, 0] = ramp(t)
-        e_new[0, 1] = _lateral_strain(problem, 1)
-        if dim == 3:
-            e_new[0, 2] = _lateral_strain(problem, 2)
-        s_new = np.zeros((1, size))
-        reference.update(s_ref, e_ref, e_new, 0.1, s_new, None)
-        s_ref, e_ref = s_new, e_new
-        sigma = stress_at_points(problem)
+    for sigma, s_ref in _steps_with_reference(problem, law, ramp, dim, 4):
         scale = abs(s_ref[0, 0])
         assert np.abs(sigma - sigma[0]).max() <= 1e-7 * scale, "the stress must be uniform"
         assert abs(sigma[0, 0] - s_ref[0, 0]) <= 1e-7 * scale, (sigma[0, 0], s_ref[0, 0])
