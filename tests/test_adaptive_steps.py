@@ -164,3 +164,39 @@ def test_cuts_between_accepted_steps_stop_at_the_step_floor():
         for _ in advance(problem, 1.0, StepControl(0.1)):
             pass
     assert problem.calls < 200
+
+
+class _Kink(_Ratchet):
+    """A stand-in problem whose time-error estimate never passes across t = 0.25 (a kink in
+    time: contact onset from rest), however small the step; elsewhere every step passes."""
+
+    def __init__(self):
+        super().__init__()
+        self.limit = float("inf")
+        self.unchecked = []
+
+    def step(self, k, tolerance=None):
+        from vpcontact.errors import StepRejected
+        t = self.time.value
+        if tolerance is not None and t < 0.25 <= t + k:
+            self.calls += 1
+            assert self.calls < 10_000, f"advance() did not stop (k = {k:g})"
+            raise StepRejected(1.79e4, 1, t + k)
+        if tolerance is None:
+            self.unchecked.append(k)
+        self.limit = float("inf")
+        report = super().step(k, tolerance)
+        self.limit = float("inf")
+        return report
+
+
+def test_an_estimate_that_does_not_fall_with_the_step_is_waived_at_its_floor():
+    """At a kink in time the error estimate stays above the tolerance however small the step
+    (a sweep's cylinder pressed into a block at rest: 1.79e4 times the tolerance at k ~ 1e-9,
+    and the run failed). A step the estimate would cut below 1e-6 k is taken at that size
+    without it, once, and the run goes on with the estimate."""
+    problem = _Kink()
+    reports = list(advance(problem, 1.0, StepControl(0.1, tolerance=0.1)))
+    assert reports[-1].time == pytest.approx(1.0)
+    assert len(problem.unchecked) == 1 and problem.unchecked[0] == pytest.approx(1e-7), \
+        problem.unchecked
