@@ -15,14 +15,20 @@ from vpcontact.scene import build
 LEFT, RIGHT, BOTTOM, BODY = 1, 2, 3, 10
 
 
-def _rectangle_msh(path, order: int = 1):
+def _rectangle_msh(path, order: int = 1, quads_too: bool = False):
     """A 2 × 1 rectangle meshed by Gmsh; physical lines 1 (x = 0), 2 (x = 2), 3 (y = 0);
-    triangles of ``order`` (2: six-node, curved-capable geometry)."""
+    triangles of ``order`` (2: six-node, curved-capable geometry); with ``quads_too`` a second
+    rectangle above it, meshed in quadrilaterals, in the body's group too."""
     if MPI.COMM_WORLD.rank == 0:
         gmsh.initialize(["gmsh", "-v", "0"])  # argv[0] is the program name
         gmsh.model.add("rectangle")
         surface = gmsh.model.occ.addRectangle(0.0, 0.0, 0.0, 2.0, 1.0)
+        upper = gmsh.model.occ.addRectangle(0.0, 1.0, 0.0, 2.0, 1.0) if quads_too else None
+        if quads_too:
+            gmsh.model.occ.fragment([(2, surface)], [(2, upper)])
         gmsh.model.occ.synchronize()
+        if quads_too:
+            gmsh.model.mesh.setRecombine(2, upper)
         lines = {}
         for dim, tag in gmsh.model.getBoundary([(2, surface)], oriented=False):
             x, y, _ = gmsh.model.occ.getCenterOfMass(dim, tag)
@@ -30,7 +36,7 @@ def _rectangle_msh(path, order: int = 1):
         gmsh.model.addPhysicalGroup(1, [lines[(0.0, 0.5)]], LEFT)
         gmsh.model.addPhysicalGroup(1, [lines[(2.0, 0.5)]], RIGHT)
         gmsh.model.addPhysicalGroup(1, [lines[(1.0, 0.0)]], BOTTOM)
-        gmsh.model.addPhysicalGroup(2, [surface], BODY)
+        gmsh.model.addPhysicalGroup(2, [surface] + ([upper] if quads_too else []), BODY)
         gmsh.option.setNumber("Mesh.CharacteristicLengthMax", 0.2)
         gmsh.model.mesh.generate(2)
         gmsh.model.mesh.setOrder(order)
@@ -140,6 +146,19 @@ def test_missing_gmsh_tag_is_reported_at_its_part(shared_tmp_path, capsys):
         line = 1 + path.read_text().splitlines().index("[boundary.floor]")
         assert re.search(rf"{re.escape(str(path))}:{line}: boundary.floor: .*tag 7 marks no boundary facet", err), err
     assert not out.exists()
+
+
+def test_a_mesh_of_triangles_and_quadrilaterals_is_a_located_error(shared_tmp_path, capsys):
+    """dolfinx takes one cell type per mesh: a Gmsh file mixing triangles and quadrilaterals
+    stopped with an internal error (an assertion inside dolfinx), and hung on 2 ranks. It is
+    refused at mesh.file, on every rank, before any mesh is built."""
+    _rectangle_msh(shared_tmp_path / "block.msh", quads_too=True)
+    path = _write(shared_tmp_path, BOTTOM)
+    assert cli.main(["validate", str(path)]) == 2
+    if MPI.COMM_WORLD.rank == 0:
+        err = capsys.readouterr().err
+        assert f"{path}:4: mesh.file: the Gmsh mesh mixes cell types (Triangle 3, " \
+            "Quadrilateral 4)" in err, err
 
 
 def test_unreadable_gmsh_file_is_a_located_error(shared_tmp_path):

@@ -179,6 +179,11 @@ def _read_gmsh(scene: Scene, comm):
                                f"{scene.mesh.dim} (the cells to use)"
                                + (f"; its groups have dimension {', '.join(map(str, dims))}"
                                   if dims else ""))
+                elif len(kinds := gmsh.model.mesh.getElementTypes(scene.mesh.dim)) > 1:
+                    names = [gmsh.model.mesh.getElementProperties(k)[0] for k in kinds]
+                    problem = (f"the Gmsh mesh mixes cell types ({', '.join(names)}): dolfinx "
+                               "takes one kind per mesh; mesh it with one (e.g. all triangles, "
+                               "or Mesh.RecombineAll = 1 for all quadrilaterals)")
             except Exception as err:  # gmsh raises plain Exceptions for unreadable files
                 problem = f"cannot read the Gmsh file: {err}"
         problem, key = comm.bcast((problem, key), root=0)
