@@ -354,6 +354,41 @@ def test_out_of_range_values_are_located(old, new, path, match):
     assert str(err).startswith(f"scene.toml:{line_of(text, f'{key} = ')}: {path}: ")
 
 
+def test_obstacle_normals_on_a_bar_are_located():
+    """normals = "obstacle" on a 1-D bar stopped with an internal error (dolfinx will not
+    tabulate the bar's one-component space); its contact point's normal is the bar's axis
+    anyway, so the key is refused at its line."""
+    text = """name = "bar"
+[mesh]
+type = "interval"
+lower = [0.0]
+upper = [1.0]
+cells = [10]
+[boundary.left]
+kind = "clamped"
+plane = { axis = "x", value = 0.0 }
+[boundary.right]
+kind = "contact"
+plane = { axis = "x", value = 1.0 }
+[material]
+E = 1000.0
+[law]
+type = "elastic"
+[contact]
+type = "signorini"
+boundary = "right"
+obstacle = { shape = "plane", point = [1.01], normal = [-1.0] }
+motion = ["-0.03*t"]
+normals = "obstacle"
+[time]
+T = 1.0
+k = 0.25
+"""
+    err = problems(text, r"contact\.normals: a 1-D body touches at its end point")
+    assert problem_at(err, "contact.normals").line == line_of(text, "normals = ")
+    loads_text(text.replace('normals = "obstacle"\n', ""))  # the default, along the bar
+
+
 def test_no_clamped_part():
     """Without a Dirichlet part a scene needs a contact part to hold the body (whether it does is
     checked on the mesh, tests/test_held_bodies.py)."""

@@ -129,6 +129,9 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
         t.forbid("normals", "not with an obstacle driven by a force (its equation balances "
                             "the forces along the body's normals only)")
     normals = t.choice("normals", ("body", "obstacle"), "body")
+    if dim == 1 and normals == "obstacle":
+        t.add("normals", "a 1-D body touches at its end point, along its own axis: the "
+                         "obstacle's normal there is the body's (leave normals out)")
     if dim == 1 and t.has("friction"):
         t.forbid("friction", "a 1-D body has no tangential direction to slip in")
     friction = _friction(t, dim) if t.has("friction") and dim != 1 else None
