@@ -50,6 +50,24 @@ def test_obstacle_gap_matches_closed_form():
     np.testing.assert_allclose(gap, exact, rtol=1e-12, atol=1e-15)
 
 
+def test_a_thin_obstacle_is_not_stepped_over():
+    """A blade 0.04 thick, 0.30 above the face, and a circle met along short chords: the rays
+    marched by doubling steps from max_distance / 2²⁰ sampled 0.256 and 0.512 and missed the
+    blade (a block lifted into it went straight through, exit 0), and reported rays through the
+    circle's edge as out of reach. Closed forms: the blade's underside, the circle's lower arc."""
+    x = np.linspace(-0.4, 0.4, 9)
+    points = np.c_[x, np.ones_like(x), np.zeros_like(x)]
+    up = np.array([0.0, 1.0, 0.0])
+    blade = lambda p: np.sqrt(p[0] ** 2 / 0.25 + (p[1] - 1.32) ** 2 / 0.0004) - 1.0  # noqa: E731
+    gap = gap_along_normal(blade, points, up, max_distance=1e3)
+    np.testing.assert_allclose(gap, 0.32 - 0.02 * np.sqrt(1.0 - x ** 2 / 0.25), rtol=1e-10)
+    circle = lambda p: np.hypot(p[0] - 0.27, p[1] - 1.644) - 0.5  # noqa: E731
+    x = np.array([0.75, 0.76])  # 0.48 and 0.49 from the centre: short chords
+    points = np.c_[x, np.ones_like(x), np.zeros_like(x)]
+    gap = gap_along_normal(circle, points, up, max_distance=1e3)
+    np.testing.assert_allclose(gap, 0.644 - np.sqrt(0.25 - (x - 0.27) ** 2), rtol=1e-10)
+
+
 def test_rotation_matrix_is_the_turn_about_its_axis():
     q = rotation_matrix([1.0, 1.0, 1.0], 2.0 * np.pi / 3.0)  # a third of a turn about (1,1,1)
     np.testing.assert_allclose(q, np.roll(np.eye(3), 1, axis=0), atol=1e-15)  # x → y → z → x
