@@ -306,6 +306,23 @@ def contact_gap(contact: Signorini, cd: ContactDofs, time: float, comm) -> np.nd
     return gap
 
 
+def _check_not_passed(obstacle, points, normals, gap, unreachable, max_distance) -> None:
+    """A moving obstacle may leave a node's ray (one sliding sideways past the body: no contact
+    there, gap = max_distance), but not by passing through the body: raise if it now lies behind
+    a node that could reach it at t = 0."""
+    lost = np.flatnonzero((gap >= max_distance) & ~unreachable)
+    if not len(lost):
+        return
+    behind = gap_along_normal(obstacle, points[lost], -normals[lost], max_distance=max_distance,
+                              check_side=False, may_miss=np.ones(len(lost), bool))
+    if np.any(behind < max_distance):
+        i = lost[int(np.argmax(behind < max_distance))]
+        raise InputError(f"the obstacle has passed through the body: it lies behind contact "
+                         f"point {points[i].round(12).tolist()} (along the normal "
+                         f"{normals[i].round(12).tolist()}), whose ray met it at t = 0",
+                         key="contact.obstacle")
+
+
 def _local_gap(contact: Signorini, cd: ContactDofs, time: float) -> np.ndarray:
     """:func:`contact_gap` at this process's nodes."""
     points = cd.points
@@ -313,12 +330,17 @@ def _local_gap(contact: Signorini, cd: ContactDofs, time: float) -> np.ndarray:
         normals = np.zeros((len(points), 3))
         normals[:, :cd.normals.shape[1]] = cd.normals
         first = cd.unreachable is None  # the nodes set up: rays may miss (no contact there)
-        gap = gap_along_normal(contact.obstacle_at(time), points, normals,
+        obstacle = contact.obstacle_at(time)
+        gap = gap_along_normal(obstacle, points, normals,
                                max_distance=contact.max_distance, signed=contact.moving,
                                check_side=time == 0.0 or not contact.moving,
-                               may_miss=np.ones(len(points), bool) if first else cd.unreachable)
+                               may_miss=np.ones(len(points), bool) if first or contact.moving
+                               else cd.unreachable)
         if first:
             cd.unreachable = gap >= contact.max_distance
+        elif contact.moving:
+            _check_not_passed(obstacle, points, normals, gap, cd.unreachable,
+                              contact.max_distance)
     elif callable(contact.gap):
         gap = np.broadcast_to(np.asarray(contact.gap(points.T), dtype=np.float64),
                               (len(points),)).copy()
