@@ -167,19 +167,6 @@ def test_resume_refusals(tmp_path, capsys):
     assert cli.main(["run", str(short), "--out", str(out), "--resume", "--quiet"]) == 2
     assert "the scene changed since the checkpoint" in capsys.readouterr().err
 
-    # a completed run whose last checkpoint lies before T: it computed the last steps again
-    every = tmp_path / "every.toml"
-    every.write_text(text + "\n[output]\ncheckpoint_every = 3\n" if "[output]" not in text
-                     else text.replace("[output]", "[output]\ncheckpoint_every = 3", 1))
-    done = tmp_path / "done"
-    assert cli.main(["run", str(every), "--out", str(done), "--quiet"]) == 0
-    steps = _summary(done)["steps"]
-    assert json.loads((done / "checkpoint" / "latest.json").read_text())["step"] < steps
-    before = (done / "summary.json").read_bytes()
-    assert cli.main(["run", str(every), "--out", str(done), "--resume", "--quiet"]) == 2
-    assert "completed (its summary.json says so): nothing to resume" in capsys.readouterr().err
-    assert (done / "summary.json").read_bytes() == before
-
 
 def test_a_torn_checkpoint_write_leaves_the_last_one_usable(tmp_path):
     """A crash while writing (a half-written archive and manifest) does not spoil the previous

@@ -174,10 +174,6 @@ def load(out: Path, problem, scene, comm) -> Restart:
             problem_text = f"--resume: cannot read {folder / MANIFEST}: {err}"
         if manifest is not None and problem_text is None:
             problem_text = _mismatch(manifest, scene, comm)
-        if problem_text is None and _completed(out):
-            problem_text = (f"--resume: the run in {out} completed (its summary.json says so): "
-                            "nothing to resume (its last checkpoint may lie a few steps before "
-                            "T, and resuming would compute those steps again)")
         if problem_text is None and manifest["time"] >= scene.time.T * (1 - 1e-12):
             problem_text = (f"--resume: the run in {out} already reached T = {scene.time.T:g} "
                             "(its last checkpoint is at its last step): nothing to resume")
@@ -199,14 +195,6 @@ def load(out: Path, problem, scene, comm) -> Restart:
     forces = {k[7:]: v for k, v in arrays.items() if k.startswith("forces_")}
     return Restart(manifest["step"], manifest["time"], manifest["record"], manifest["control"],
                    history, forces)
-
-
-def _completed(out) -> bool:
-    """Whether the run in ``out`` ended complete, by its summary.json (rank 0)."""
-    try:
-        return json.loads((Path(out) / "summary.json").read_text()).get("completed") is True
-    except (OSError, ValueError, AttributeError):
-        return False
 
 
 def _mismatch(manifest: dict, scene, comm) -> Optional[str]:
