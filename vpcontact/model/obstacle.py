@@ -64,16 +64,8 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
         raise InputError(f"max_distance must be > 0, got {max_distance}",
                          key="contact.max_distance")
 
-    def f(s):
-        values = np.asarray(phi((points + s[:, None] * normal).T), dtype=np.float64)
-        values = np.broadcast_to(values, s.shape)
-        if not np.isfinite(values).all():
-            raise InputError("the obstacle level set evaluated to NaN/Inf near the contact surface",
-                             key="contact.obstacle")
-        return values
-
-    def f_open(s, rays):
-        """φ at distance s along the rays selected by the mask ``rays``."""
+    def f(s, rays=slice(None)):
+        """φ at distance s along the rays ``rays`` (a mask or index; default all)."""
         values = np.asarray(phi((points[rays] + s[:, None] * normal[rays]).T), dtype=np.float64)
         values = np.broadcast_to(values, s.shape)
         if not np.isfinite(values).all():
@@ -110,7 +102,7 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
     open_ = np.isnan(hi)
     while open_.any():
         f_s = np.ones(n)
-        f_s[open_] = f_open(s[open_], open_)
+        f_s[open_] = f(s[open_], open_)
         crossed = open_ & (f_s <= 0)
         hi[crossed] = s[crossed]
         lo = np.where(open_ & ~crossed, s, lo)

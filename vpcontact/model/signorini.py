@@ -421,15 +421,13 @@ class ContactMonitor:
             self._vertices = _VertexPressure(V, equilibrium_form, facet_tags, tag, cdofs)
         self._points = None  # (PointDofs, time Constant): the point loads, subtracted from R
 
-    def set_point_loads(self, points, time: fem.Constant) -> None:
-        """Subtract the point loads ``points`` (:class:`~vpcontact.solver.loads.PointLoad`,
-        F at ``time``) from the residual: they are applied forces, not the obstacle's
-        (collective)."""
-        from vpcontact.solver.loads import PointDofs
-        V = self.u.function_space
-        self._points = ([PointDofs(V, p) for p in points], time)
+    def set_point_loads(self, loads, time: fem.Constant) -> None:
+        """Subtract the point loads ``loads`` (the problem's located
+        :class:`~vpcontact.solver.loads.PointDofs`, F at ``time``) from the residual: they
+        are applied forces, not the obstacle's (collective)."""
+        self._points = (loads, time)
         if self._vertices is not None:
-            self._vertices.set_point_loads(V, points, time)
+            self._vertices.set_point_loads(self.u.function_space, loads, time)
 
     def _subtract_point_loads(self, vec: PETSc.Vec) -> None:
         """R − P on this rank's owned entries of the assembled (ghost-updated) ``vec``."""
@@ -522,11 +520,11 @@ class _VertexPressure:
         self._V1 = V1
         self._points = None  # (local V1 dofs incl. ghosts, (n, bs) weights, loads, time)
 
-    def set_point_loads(self, V, points, time: fem.Constant) -> None:
-        """The point loads tested with the P1 hat functions: a load F at a node x_p of V
-        gives φ¹_a(x_p) F at the vertices a of a cell around x_p (F at a vertex, F/2 at the
-        ends of an edge whose midpoint it is, …); found by the rank that owns the node."""
-        from vpcontact.solver.loads import PointDofs
+    def set_point_loads(self, V, loads, time: fem.Constant) -> None:
+        """The point loads (located :class:`~vpcontact.solver.loads.PointDofs`) tested with the
+        P1 hat functions: a load F at a node x_p of V gives φ¹_a(x_p) F at the vertices a of a
+        cell around x_p (F at a vertex, F/2 at the ends of an edge whose midpoint it is, …);
+        found by the rank that owns the node."""
         V1, bs = self._V1, self._bs
         mesh = V.mesh
         tdim = mesh.topology.dim
@@ -536,8 +534,7 @@ class _VertexPressure:
         coordinates = V.tabulate_dof_coordinates()
         hat = fem.Function(fem.FunctionSpace(mesh, ("Lagrange", 1)))
         rows, weights, loads = [], [], []
-        for point in points:
-            load = PointDofs(V, point)
+        for load in loads:
             if len(load.dofs) == 0:
                 continue
             block = load.dofs[0] // bs

@@ -280,7 +280,7 @@ class QuasistaticProblem:
         self._point_loads = [PointDofs(self.V, p) for p in loads.points]
         for part in self.contacts:  # a point load at a contact node is not the obstacle's force
             if part.bounded and self._point_loads:
-                part.monitor.set_point_loads(loads.points, self.time)
+                part.monitor.set_point_loads(self._point_loads, self.time)
         # Only what is called for: a constitutive update linear in ε with no compliance term
         # has a Jacobian that changes with the step size only; it is factorized once per size.
         # (an obstacle driven by a force changes the unknowns' map P at every step)
@@ -637,7 +637,7 @@ class QuasistaticProblem:
         obstacles and foundations, shape (dim,) (zero without contact) — with ``per_part`` each
         contact part's, shape (contact parts, dim) —, from the equilibrium residual
         (σ, ε(v)) - (f, v) - P, P the point loads (see :mod:`vpcontact.solver.dirichlet`;
-        a compliance part's from its own term, :meth:`_contact_forces`)
+        a frictionless compliance part's from its own term, :meth:`_contact_forces`)
 
         With ``split``, a third item: each contact part's force split along the body's outward
         normals ν_i at its nodes, shape (contact parts, 2): the normal force N = −Σ_i f_i·ν_i
