@@ -85,10 +85,10 @@ _EXPRS = "array of expressions (one per dimension)"
 TABLES: dict[str, tuple[Key, ...]] = {
     "": (
         _k("name", "string", Varies("the file's name without .toml", ()), "—",
-           "the scene's name: the default output folder is output/<name>/"),
+           "the scene's name: the default output folder is `output/<name>/`"),
         _k("description", "string", "", "—", "one line shown by `list` and `show`"),
         _k("mesh", "table", REQUIRED, "—", "the mesh: a built-in interval/rectangle/box or a Gmsh file"),
-        _k("boundary", "tables [boundary.<name>]", {}, "—",
+        _k("boundary", "tables `[boundary.<name>]`", {}, "—",
            "named parts of the boundary and their conditions"),
         _k("loads", "table", Varies("no loads", ()), "—", "body force and point loads"),
         _k("material", "table", REQUIRED, "—", "elastic constants"),
@@ -152,7 +152,7 @@ TABLES: dict[str, tuple[Key, ...]] = {
     ),
     "loads": (
         _k("body_force", _EXPRS + " of x, t", _ZEROS, "force/volume", "body force f_0(x, t)"),
-        _k("point", "array of tables [[loads.point]]", Varies("no point loads", ()), "—",
+        _k("point", "array of tables `[[loads.point]]`", Varies("no point loads", ()), "—",
            "point loads at mesh vertices"),
     ),
     "loads.point[]": (
