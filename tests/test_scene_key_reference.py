@@ -8,7 +8,10 @@ order the reader lists them (the order shows in "expected one of" messages), and
 the reader used must be the registry's. The generated reference page must list every key.
 """
 
+import importlib.util
 import re
+from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
@@ -292,8 +295,18 @@ def test_obstacle_keys_are_shape_and_every_shape_parameter():
     assert registry.keys("contact.obstacle") == ("shape",) + tuple(union)
 
 
-def test_reference_page_lists_every_key():
-    page = registry.reference_markdown()
+def _built_reference(tmp_path) -> str:
+    """The scene-key page as the manual's extension (docs/_ext/vpdocs.py) writes it."""
+    path = Path(__file__).resolve().parents[1] / "docs" / "_ext" / "vpdocs.py"
+    spec = importlib.util.spec_from_file_location("vpdocs", path)
+    vpdocs = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(vpdocs)
+    vpdocs.generate(SimpleNamespace(srcdir=str(tmp_path)))
+    return (tmp_path / "_generated" / "scene_keys.md").read_text(encoding="utf-8")
+
+
+def test_reference_page_lists_every_key(tmp_path):
+    page = _built_reference(tmp_path)
     sections = re.split(r"^## ", page, flags=re.M)[1:]
     assert len(sections) == len(registry.TABLES)
     for (table, entries), section in zip(registry.TABLES.items(), sections):
@@ -304,3 +317,35 @@ def test_reference_page_lists_every_key():
         assert names == [e.name for e in entries], f"{table}: {names}"
         for entry, row in zip(entries, rows):
             assert entry.description.replace("|", "\\|") in row
+
+
+# The tables' keys as the readers listed them before the registry (1c56bc3): removing an entry
+# from the registry would silently shrink what a reader accepts. A new key is added here too.
+KEYS_BEFORE_THE_REGISTRY = {
+    "": ("name", "description", "mesh", "boundary", "loads", "material", "law", "contact",
+         "initial", "time", "discretization", "solver", "output"),
+    "mesh": ("type", "lower", "upper", "cells", "cell_type", "diagonal", "file", "dim"),
+    "boundary.<name>": ("kind", "tag", "plane", "box", "where", "traction", "displacement"),
+    "boundary.<name>.plane": ("axis", "value", "tol"),
+    "boundary.<name>.box": ("lower", "upper"),
+    "loads": ("body_force", "point"),
+    "loads.point[]": ("at", "force"),
+    "material": ("E", "nu", "plane"),
+    "law": ("type", "scheme", "sigma_y", "mu_star", "yield_set", "a", "b"),
+    "contact": ("type", "boundary", "gap", "obstacle", "motion", "rotation", "force",
+                "max_distance", "mu", "alpha", "friction", "normals"),
+    "contact.friction": ("type", "coefficient", "threshold"),
+    "contact.obstacle": ("shape", "axis", "center", "normal", "point", "radius", "semi_axes"),
+    "contact.rotation": ("center", "angle", "axis"),
+    "initial": ("u0", "sigma0"),
+    "time": ("T", "k", "max_cuts", "scheme", "tolerance"),
+    "discretization": ("degree", "formulation"),
+    "solver": ("predictor", "linear", "petsc_options"),
+    "output": ("xdmf", "contact_csv", "figures", "every", "checkpoint_every"),
+}
+
+
+def test_the_registry_keeps_every_key_the_readers_accepted():
+    assert set(registry.TABLES) == set(KEYS_BEFORE_THE_REGISTRY)
+    for table, accepted in KEYS_BEFORE_THE_REGISTRY.items():
+        assert registry.keys(table) == accepted, (table, registry.keys(table))
