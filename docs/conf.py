@@ -9,8 +9,7 @@ import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-sys.path.insert(0, str(HERE / "_ext"))
-sys.path.insert(0, str(HERE.parent))
+sys.path.insert(0, str(HERE / "_ext"))  # vpcontact itself: the venv's (editable) install
 
 project = "vpcontact"
 author = "the vpcontact authors"
