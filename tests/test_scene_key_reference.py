@@ -5,11 +5,15 @@ While the bundled scenes and a few broad ones are read, every :class:`~vpcontact
 the readers create is recorded with the keys it accepts, and every default a getter falls back to
 for an absent key. Each accepted key must have a registry entry with a description, in the
 order the reader lists them (the order shows in "expected one of" messages), and the default
-the reader used must be the registry's. The generated reference page must list every key.
+the reader used must be the registry's; leaving out each key the scenes give, one at a time,
+must make the reader fall back to the registry's default (or report a required key missing).
+The reference page, as the manual's extension writes it, must list every key. The key lists
+are also pinned as the readers had them before the registry.
 """
 
 import importlib.util
 import re
+import tomllib
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -17,7 +21,9 @@ import pytest
 
 from vpcontact.scene import bundled, load, loads_text
 from vpcontact.scene import keys as registry
-from vpcontact.scene.schema import REQUIRED, Table
+from vpcontact.scene.locate import join
+from vpcontact.scene.read import read_scene
+from vpcontact.scene.schema import REQUIRED, Report, Table
 from vpcontact.scene.specs import SHAPES
 
 BROAD_3D = """\
@@ -278,16 +284,8 @@ def test_defaults_the_readers_use_are_the_registry_s(recorded):
     for path, key, used in fallbacks:
         pattern = registry.pattern_of(path)
         entry = registry.entry(pattern, key)
-        where = f"{path}.{key} ({pattern})"
-        if entry.default is REQUIRED or used is REQUIRED:
-            assert entry.default is used, f"{where}: reader {used!r}, registry {entry.default!r}"
-        elif isinstance(entry.default, registry.Varies):
-            if entry.default.values:
-                assert used in entry.default.values, f"{where}: reader's default {used!r} is not " \
-                                                     f"among {entry.default.values}"
-        else:
-            assert type(used) is type(entry.default) and used == entry.default, (
-                f"{where}: reader's default {used!r}, registry's {entry.default!r}")
+        assert _agrees(entry, used), (
+            f"{path}.{key} ({pattern}): reader's default {used!r}, registry's {entry.default!r}")
 
 
 def test_obstacle_keys_are_shape_and_every_shape_parameter():
@@ -349,3 +347,70 @@ def test_the_registry_keeps_every_key_the_readers_accepted():
     assert set(registry.TABLES) == set(KEYS_BEFORE_THE_REGISTRY)
     for table, accepted in KEYS_BEFORE_THE_REGISTRY.items():
         assert registry.keys(table) == accepted, (table, registry.keys(table))
+
+
+def _tables(data: dict, path: str = ""):
+    """(key path, table) of every table and array-of-tables element in a parsed scene."""
+    yield path, data
+    for key, value in data.items():
+        child = join(path, key)
+        if isinstance(value, dict):
+            yield from _tables(value, child)
+        elif isinstance(value, list):
+            for i, item in enumerate(value):
+                if isinstance(item, dict):
+                    yield from _tables(item, join(child, i))
+
+
+def _agrees(entry, used) -> bool:
+    """Whether the default a reader used is the registry entry's."""
+    if entry.default is REQUIRED or used is REQUIRED:
+        return entry.default is used
+    if isinstance(entry.default, registry.Varies):
+        return not entry.default.values or used in entry.default.values
+    return type(used) is type(entry.default) and used == entry.default
+
+
+def test_each_key_left_out_falls_back_to_the_registry_default():
+    """Leave out, one at a time, every key the scenes above give: the default the reader then
+    falls back to (REQUIRED included: it reports the key missing) is the registry's."""
+    fallbacks = []
+    get = Table._get
+
+    def logging_get(self, key, default):
+        if key not in self.data:
+            fallbacks.append((registry.pattern_of(self.path), key, default))
+        return get(self, key, default)
+
+    checked = set()
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(Table, "_get", logging_get)
+        for name, text in TEXTS.items():
+            for path, table in list(_tables(tomllib.loads(text))):
+                pattern = registry.pattern_of(path)
+                if pattern not in registry.TABLES or pattern == "":
+                    continue
+                for key in list(table):
+                    if isinstance(table[key], dict):
+                        continue
+                    data = tomllib.loads(text)
+                    del dict(_tables(data))[path][key]
+                    fallbacks.clear()
+                    report = Report(f"{name}.toml")
+                    read_scene(data, report, Path("."), name)
+                    entry = registry.entry(pattern, key)
+                    used = [d for p, k, d in fallbacks if (p, k) == (pattern, key)]
+                    for default in used:
+                        assert _agrees(entry, default), (
+                            f"{name}: without {path}.{key} the reader fell back to {default!r}, "
+                            f"the registry says {entry.default!r}")
+                    if entry.default is REQUIRED:
+                        assert used, f"{name}: without {path}.{key} the reader did not ask for it"
+                        assert any(p.path == join(path, key) and "missing" in p.message
+                                   for p in report.problems), (path, key, report.problems)
+                    if used:
+                        checked.add((pattern, key))
+    required = {(t, e.name) for t, entries in registry.TABLES.items() for e in entries
+                if e.default is REQUIRED and e.type != "table" and t != ""}
+    # the Gmsh keys need a mesh file; every other required key was left out once above
+    assert required - checked == {("mesh", "file"), ("mesh", "dim")}, required - checked
