@@ -10,7 +10,9 @@ PY=/usr/bin/python3
 PACKAGES=(python3-dolfinx-real python3-basix python3-ffcx python3-ufl python3-petsc4py-real
           python3-mpi4py libdolfinx-dev pybind11-dev python3-pybind11 python3-numpy python3-pytest
           python3-matplotlib python3-meshio python3-venv python3-pip openmpi-bin cmake g++ make
-          libopenblas0-pthread python3-gmsh python3-hypothesis)
+          libopenblas0-pthread python3-gmsh python3-hypothesis
+          python3-sphinx python3-myst-parser furo)
+# Sphinx, MyST and furo build the manual (scripts/docs.sh).
 # OpenBLAS replaces Debian's reference BLAS (alternatives): MUMPS factorizations run about 2x faster.
 # One BLAS thread per process: the tests and demos run one MPI rank per core.
 export OPENBLAS_NUM_THREADS="${OPENBLAS_NUM_THREADS:-1}"

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 from vpcontact.scene.expressions import Expression
+from vpcontact.scene.keys import default, keys
 from vpcontact.scene.schema import (Check, Table, at_least, between, constant_value, greater,
                                     type_name)
 from vpcontact.scene.locate import join
@@ -19,24 +20,27 @@ from vpcontact.scene.specs import (SHAPES, ContactSpec, FrictionSpec, LawSpec, O
 
 __all__ = ["CONTACT_KEYS", "LAW_KEYS", "read_contacts", "read_law"]
 
-LAW_KEYS = ("type", "scheme", "sigma_y", "mu_star", "yield_set", "a", "b")
-CONTACT_KEYS = ("type", "boundary", "gap", "obstacle", "motion", "rotation", "force",
-                "max_distance", "mu", "alpha", "friction", "normals")
-FRICTION_KEYS = ("type", "coefficient", "threshold")
-ROTATION_KEYS = ("center", "angle", "axis")
+# The keys each table accepts come from the registry (vpcontact/scene/keys.py), which the
+# manual's scene-key reference is generated from.
+LAW_KEYS = keys("law")
+CONTACT_KEYS = keys("contact")
+FRICTION_KEYS = keys("contact.friction")
+ROTATION_KEYS = keys("contact.rotation")
+#: The keys of a built-in obstacle shape's table: "shape" and every shape's parameters.
+OBSTACLE_KEYS = keys("contact.obstacle")
 LAW_TYPES = ("elastic", "perzyna", "linear")
 SCHEMES = ("explicit", "implicit", "linearized")
 DEFAULT_SCHEME = {"elastic": "explicit", "perzyna": "implicit", "linear": "explicit"}
 PERZYNA_KEYS = ("sigma_y", "mu_star", "yield_set")
 LINEAR_KEYS = ("a", "b")
 CONTACT_TYPES = ("none", "signorini", "normal_compliance")
-DEFAULT_MAX_DISTANCE = 1e3
+DEFAULT_MAX_DISTANCE = default("contact", "max_distance")
 
 
 def read_law(top: Table, dim: int | None) -> LawSpec:
     """``[law]`` (absent: elastic)."""
     t = top.section("law", LAW_KEYS)
-    law = t.choice("type", LAW_TYPES, "elastic")
+    law = t.choice("type", LAW_TYPES, default("law", "type"))
     scheme = t.choice("scheme", SCHEMES, DEFAULT_SCHEME.get(law, "explicit"))
     if law != "perzyna":
         for key in PERZYNA_KEYS:
@@ -128,7 +132,7 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     if t.has("force"):
         t.forbid("normals", "not with an obstacle driven by a force (its equation balances "
                             "the forces along the body's normals only)")
-    normals = t.choice("normals", ("body", "obstacle"), "body")
+    normals = t.choice("normals", ("body", "obstacle"), default("contact", "normals"))
     if dim == 1 and normals == "obstacle":
         t.add("normals", "a 1-D body touches at its end point, along its own axis: the "
                          "obstacle's normal there is the body's (leave normals out)")
@@ -156,7 +160,8 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
                            max_distance=t.number("max_distance", DEFAULT_MAX_DISTANCE,
                                                  check=greater(0)),
                            mu=t.number("mu", check=greater(0)) if kind != "signorini" else None,
-                           alpha=(t.number("alpha", 1.0, check=between(0.0, 1.0, "(]"))
+                           alpha=(t.number("alpha", default("contact", "alpha"),
+                                           check=between(0.0, 1.0, "(]"))
                                   if kind != "signorini" else None))
     t.forbid("max_distance", "only with an obstacle")
     t.forbid("motion", "only with an obstacle")
@@ -165,7 +170,8 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     if kind == "signorini":
         return ContactSpec(kind, boundary, gap=_gap(t, dim), friction=friction)
     return ContactSpec(kind, boundary, gap=_gap(t, dim), mu=t.number("mu", check=greater(0)),
-                       alpha=t.number("alpha", 1.0, check=between(0.0, 1.0, "(]")),
+                       alpha=t.number("alpha", default("contact", "alpha"),
+                                      check=between(0.0, 1.0, "(]")),
                        friction=friction)
 
 
@@ -199,7 +205,7 @@ def _obstacle(t: Table, dim: int | None, moving: bool) -> Expression | ObstacleS
     built-in shape ``{ shape = "sphere", center = [...], radius = R }`` (see ``SHAPES``)."""
     if not isinstance(t.data.get("obstacle"), dict):
         return t.expr("obstacle", ("x", "t") if moving else ("x",), dim)
-    s = t.table("obstacle", ("shape",) + tuple(sorted({k for ks in SHAPES.values() for k in ks})))
+    s = t.table("obstacle", OBSTACLE_KEYS)
     shape = s.choice("shape", tuple(SHAPES))
     if shape is None:
         return None
@@ -256,7 +262,7 @@ def _rotation(t: Table, dim: int | None) -> ObstacleRotation | None:
 
 def _gap(t: Table, dim: int | None) -> Expression | None:
     """The initial gap g(x) (default 0); a constant gap must be ≥ 0."""
-    gap = t.expr("gap", ("x",), dim, 0)
+    gap = t.expr("gap", ("x",), dim, default("contact", "gap"))
     if gap is None or not gap.is_constant:
         return gap
     value = constant_value(t.report, t.at("gap"), gap)

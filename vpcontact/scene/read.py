@@ -14,6 +14,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+from vpcontact.scene.keys import default, keys
 from vpcontact.scene.locate import join
 from vpcontact.scene.physics import read_contacts, read_law
 from vpcontact.scene.schema import (REQUIRED, Report, Table, at_least, between, fmt, greater, type_name,
@@ -28,10 +29,11 @@ from vpcontact.scene.specs import (BUILTIN_MESHES, CELL_TYPES, DIAGONALS, Bounda
 
 __all__ = ["TOP_KEYS", "read_scene"]
 
-TOP_KEYS = ("name", "description", "mesh", "boundary", "loads", "material", "law", "contact",
-            "initial", "time", "discretization", "solver", "output")
-MESH_KEYS = ("type", "lower", "upper", "cells", "cell_type", "diagonal", "file", "dim")
-PART_KEYS = ("kind", "tag", "plane", "box", "where", "traction", "displacement")
+# The keys each table accepts come from the registry (vpcontact/scene/keys.py), which the
+# manual's scene-key reference is generated from.
+TOP_KEYS = keys("")
+MESH_KEYS = keys("mesh")
+PART_KEYS = keys("boundary.<name>")
 SELECTORS = ("tag", "plane", "box", "where")
 KINDS = ("clamped", "displacement", "symmetry", "traction", "contact")
 #: Kinds that prescribe displacement components (Dirichlet parts).
@@ -64,7 +66,7 @@ def read_scene(data: dict, report: Report, base_dir: Path, default_name: str) ->
     material, law = read_material(top, dim), read_law(top, dim)
     return {
         "name": top.string("name", default_name, pattern=SCENE_NAME),
-        "description": top.string("description", ""),
+        "description": top.string("description", default("", "description")),
         "dim": dim,
         "mesh": mesh,
         "boundaries": boundaries,
@@ -115,7 +117,7 @@ def _builtin_mesh(t: Table, mesh_type: str) -> MeshSpec:
         cell_type = None
     diagonal = None
     if cell_type == "triangle":
-        diagonal = t.choice("diagonal", DIAGONALS, "right")
+        diagonal = t.choice("diagonal", DIAGONALS, default("mesh", "diagonal"))
     elif cell_type is not None:
         t.forbid("diagonal", "only for triangle meshes")
     if cells is not None and cell_type is not None:
@@ -200,7 +202,7 @@ def _read_part(t: Table, name: str, mesh: MeshSpec | None) -> BoundaryPart:
 
 
 def _read_plane(t: Table, dim: int | None) -> PlaneSelector | None:
-    p = t.table("plane", ("axis", "value", "tol"))
+    p = t.table("plane", keys("boundary.<name>.plane"))
     if p is None:
         return None
     raw_axis = p.choice("axis", ("x", "y", "z", 0, 1, 2))
@@ -210,14 +212,14 @@ def _read_plane(t: Table, dim: int | None) -> PlaneSelector | None:
                       + (" (use 'x')" if dim == 1 else ""))
         axis = None
     value = p.number("value")
-    tol = p.number("tol", None, check=greater(0))
+    tol = p.number("tol", default("boundary.<name>.plane", "tol"), check=greater(0))
     if axis is None or value is None or (p.has("tol") and tol is None):
         return None
     return PlaneSelector(axis, value, tol)
 
 
 def _read_box(t: Table, dim: int | None) -> BoxSelector | None:
-    b = t.table("box", ("lower", "upper"))
+    b = t.table("box", keys("boundary.<name>.box"))
     if b is None:
         return None
     lower, upper = b.numbers("lower", dim), b.numbers("upper", dim)
@@ -287,7 +289,7 @@ def _suggest(name: str, names: list[str]) -> str:
 
 def read_loads(top: Table, dim: int | None) -> LoadSpec:
     """``[loads]``: body force and ``[[loads.point]]`` point loads."""
-    t = top.section("loads", ("body_force", "point"))
+    t = top.section("loads", keys("loads"))
     body_force = t.exprs("body_force", ("x", "t"), dim, dim, zeros(dim))
     raw = t.data.get("point", [])
     points = []
@@ -298,14 +300,14 @@ def read_loads(top: Table, dim: int | None) -> LoadSpec:
         if not isinstance(item, dict):
             t.report.add(join(t.at("point"), i), f"expected a table, got {type_name(item)}")
             continue
-        p = Table(t.report, join(t.at("point"), i), item, ("at", "force"))
+        p = Table(t.report, join(t.at("point"), i), item, keys("loads.point[]"))
         points.append(PointLoad(p.numbers("at", dim), p.exprs("force", ("t",), dim, dim)))
     return LoadSpec(body_force, tuple(points))
 
 
 def read_material(top: Table, dim: int | None) -> MaterialSpec:
     """``[material]``: E, ν (not in 1-D) and the 2-D model."""
-    t = top.section("material", ("E", "nu", "plane"), required=True)
+    t = top.section("material", keys("material"), required=True)
     # (E ≤ 0 is not a material; outside [1e-100, 1e100] the stresses leave double precision)
     young = t.number("E", check=lambda v: (greater(0)(v)
                                            or between(MIN_MODULUS, MAX_MODULUS, "[]")(v)))
@@ -316,7 +318,7 @@ def read_material(top: Table, dim: int | None) -> MaterialSpec:
         # ν = 0.5 only with the mixed formulation (checked with [discretization])
         nu = t.number("nu", None if dim is None else REQUIRED, check=between(-1.0, 0.5, "(]"))
     if dim == 2:
-        plane = t.choice("plane", ("stress", "strain"), "stress")
+        plane = t.choice("plane", ("stress", "strain"), default("material", "plane"))
     elif dim is not None:
         t.forbid("plane", "only for 2-D scenes (plane stress or plane strain)")
     return MaterialSpec(young, nu, plane)
@@ -324,7 +326,7 @@ def read_material(top: Table, dim: int | None) -> MaterialSpec:
 
 def read_initial(top: Table, dim: int | None) -> InitialSpec:
     """``[initial]``: u_0(x) and σ_0(x) (Voigt order s11 s22 s33 s23 s13 s12, by dimension)."""
-    t = top.section("initial", ("u0", "sigma0"))
+    t = top.section("initial", keys("initial"))
     n_stress = {1: 1, 2: 3, 3: 6}.get(dim)
     return InitialSpec(t.exprs("u0", ("x",), dim, dim, zeros(dim)),
                        t.exprs("sigma0", ("x",), dim, n_stress, zeros(n_stress)))
@@ -341,9 +343,10 @@ def read_discretization(top: Table, dim: int | None, material: MaterialSpec,
     isochoric flow, or elasticity with ν ≥ 0.45 (:func:`vpcontact.model.locking.locking_expected`)
     — unless ``degree = 1`` is asked for (the paper's P1/P0 scheme), else ``"displacement"``.
     """
-    t = top.section("discretization", ("degree", "formulation"))
-    formulation = t.choice("formulation", ("auto",) + FORMULATIONS, "auto")
-    degree = t.choice("degree", (1, 2), None)
+    t = top.section("discretization", keys("discretization"))
+    formulation = t.choice("formulation", ("auto",) + FORMULATIONS,
+                           default("discretization", "formulation"))
+    degree = t.choice("degree", (1, 2), default("discretization", "degree"))
     three_d = dim == 3 or (dim == 2 and material.plane == "strain")
     constants = [law.a, law.b]
     isochoric = law.type in ("elastic", "perzyna") or (
@@ -371,24 +374,25 @@ def read_discretization(top: Table, dim: int | None, material: MaterialSpec,
 
 def read_time(top: Table) -> TimeSpec:
     """``[time]``: T > 0, 0 < k ≤ T, max_cuts, scheme, tolerance."""
-    t = top.section("time", ("T", "k", "max_cuts", "scheme", "tolerance"), required=True)
+    t = top.section("time", keys("time"), required=True)
     final, step = t.number("T", check=greater(0)), t.number("k", check=greater(0))
     if final is not None and step is not None:
         if step > final:
             t.add("k", f"must be <= T = {fmt(final)}, got {fmt(step)}")
         elif final / step > MAX_STEPS:
             t.add("k", f"too many time steps (T/k = {final / step:.3g}, at most {MAX_STEPS})")
-    max_cuts = t.integer("max_cuts", 12, check=between(0, MAX_CUTS, "[]"))
-    scheme = t.choice("scheme", TIME_SCHEMES, "euler")
-    tolerance = t.number("tolerance", None, check=between(0.0, 1.0))
+    max_cuts = t.integer("max_cuts", default("time", "max_cuts"),
+                         check=between(0, MAX_CUTS, "[]"))
+    scheme = t.choice("scheme", TIME_SCHEMES, default("time", "scheme"))
+    tolerance = t.number("tolerance", default("time", "tolerance"), check=between(0.0, 1.0))
     return TimeSpec(final, step, max_cuts, scheme, tolerance)
 
 
 def read_solver(top: Table) -> SolverSpec:
     """``[solver]``: predictor, linear solver and PETSc options (keys without the leading "-")."""
-    t = top.section("solver", ("predictor", "linear", "petsc_options"))
-    predictor = t.choice("predictor", ("linear", "none"), "linear")
-    linear = t.choice("linear", LINEAR_SOLVERS, "auto")
+    t = top.section("solver", keys("solver"))
+    predictor = t.choice("predictor", ("linear", "none"), default("solver", "predictor"))
+    linear = t.choice("linear", LINEAR_SOLVERS, default("solver", "linear"))
     raw = t.data.get("petsc_options", {})
     if not isinstance(raw, dict):
         t.add("petsc_options", f"expected a table, got {type_name(raw)}")
@@ -420,11 +424,13 @@ def _petsc_option_problem(key: str, value: Any) -> str | None:
 
 def read_output(top: Table, contacts: tuple) -> OutputSpec:
     """``[output]``: XDMF, contact CSV (only with contact), figures, XDMF stride, checkpoints."""
-    t = top.section("output", ("xdmf", "contact_csv", "figures", "every", "checkpoint_every"))
+    t = top.section("output", keys("output"))
     contact_csv = t.boolean("contact_csv", bool(contacts))
     if contact_csv and not contacts:
         t.add("contact_csv", "needs a [contact] section with type other than 'none'")
-    return OutputSpec(xdmf=t.boolean("xdmf", True), contact_csv=contact_csv,
-                      figures=t.boolean("figures", True),
-                      every=t.integer("every", 1, check=at_least(1)),
-                      checkpoint_every=t.integer("checkpoint_every", 10, check=at_least(0)))
+    return OutputSpec(xdmf=t.boolean("xdmf", default("output", "xdmf")), contact_csv=contact_csv,
+                      figures=t.boolean("figures", default("output", "figures")),
+                      every=t.integer("every", default("output", "every"), check=at_least(1)),
+                      checkpoint_every=t.integer("checkpoint_every",
+                                                 default("output", "checkpoint_every"),
+                                                 check=at_least(0)))
