@@ -340,14 +340,14 @@ class StepSolver:
 
     def _use_lagged_solver(self) -> None:
         """Reduced VI systems solved with a kept full-size preconditioner (:mod:`.vi_solver`)."""
-        fixed = self.constant_jacobian or self.jacobian_per_step
-        aimed = self._block is not None and fixed
+        aimed = self._block is not None and (self.constant_jacobian or self.jacobian_per_step)
+        lag = LagPolicy(self.snes, self.test, self._own.lag_below,
+                        lambda: self.constant_jacobian or self.jacobian_per_step)
         self.lagged_lu = use_lagged_solver(
             self.snes, self._A, self.prefix, self._options, self._own.vi_linear,
             lambda: self._modes or rigid_body_modes(self.u.function_space, self._P,
                                                     layout=self.fields),
-            self._block, LagPolicy(self.snes, self.test, self._own.lag_below, fixed), aimed,
-            self._bounds)
+            self._block, lag, aimed, self._bounds)
         self.test.aimed = aimed
 
     def _load_iterate(self, x: PETSc.Vec) -> None:

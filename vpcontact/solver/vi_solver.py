@@ -25,14 +25,15 @@ class LagPolicy:
         snes: the step's SNES.
         test: its :class:`~vpcontact.solver.convergence.ConvergenceTest` (``fnorm0``).
         lag_below: ``vpcontact_vi_lag_below``.
-        fixed: the Jacobian is fixed within the step.
+        fixed: whether the Jacobian is fixed within the step (asked at every call: the step
+            solver's flags may change after set-up).
     """
 
-    def __init__(self, snes: PETSc.SNES, test, lag_below: float, fixed: bool):
+    def __init__(self, snes: PETSc.SNES, test, lag_below: float, fixed: Callable[[], bool]):
         self.snes, self.test, self.lag_below, self.fixed = snes, test, lag_below, fixed
 
     def __call__(self) -> bool:
-        return (self.fixed or self.snes.getIterationNumber() == 0
+        return (self.fixed() or self.snes.getIterationNumber() == 0
                 or self.snes.getFunctionNorm() <= self.lag_below * self.test.fnorm0)
 
 
