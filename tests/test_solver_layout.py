@@ -17,7 +17,8 @@ PC = SOLVER / "pc"
 #: the solver's modules that compose SNES and its linear solvers (the problem's own module and
 #: the time loop's are checked with the problem's restructuring)
 OWN = sorted([*(SOLVER / name for name in (
-    "step_solver.py", "step_options.py", "convergence.py", "retries.py", "line_search.py",
+    "step_solver.py", "step_options.py", "assembly.py", "convergence.py", "retries.py",
+    "line_search.py",
     "vi_bounds.py", "vi_solver.py", "vi_linear.py", "linear.py", "near_nullspace.py",
     "snes_options.py", "option_reads.py", "__init__.py")), *PC.glob("*.py")])
 PRECONDITIONERS = ("p_multigrid", "star_smoother", "star_schur", "coarse_schur", "fieldsplit",

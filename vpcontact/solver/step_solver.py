@@ -23,7 +23,6 @@ from typing import Callable, Optional, Sequence
 
 import numpy as np
 from dolfinx import fem
-from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -31,6 +30,7 @@ from vpcontact.errors import ConvergenceError, InputError, SolverOptionError
 from vpcontact.model.extent import mesh_extent
 from vpcontact.solver import linear as linear_solvers
 from vpcontact.solver import pc as preconditioners
+from vpcontact.solver.assembly import StepAssembly
 from vpcontact.solver.convergence import ConvergenceTest
 from vpcontact.solver.near_nullspace import rigid_body_modes
 from vpcontact.solver.option_reads import OptionReads
@@ -110,7 +110,6 @@ class StepSolver:
         self.fields = fields
         self.u = fields.u
         self.bcs = list(bcs)
-        self._refresh = refresh
         self._P = variables
         self._nodal = list(nodal_terms)
         #: the longest first try a term with another guess may ask for, which :meth:`solve`
@@ -118,7 +117,19 @@ class StepSolver:
         self._first_try = longest_first_try(self._nodal)
         self.constant_jacobian = constant_jacobian
         self.jacobian_per_step = jacobian_per_step and not constant_jacobian
-        self._create_vectors(load, point_forces)
+        self._step_key = None  # (t_n, k) of the solve under way (jacobian_per_step)
+        self._jacobian_step_key = None  # ... and of the assembled Jacobian
+        self._jacobian_dt: Optional[float] = None  # step size of the assembled constant Jacobian
+        self._restored_jacobian_dt: Optional[float] = None  # the same before a restart
+        self.dt = 0.0  # set by the owner before each solve (only the constant-Jacobian reuse reads it)
+        #: wall time [s] spent in the refresh hook (kernels), residual and Jacobian assembly,
+        #: in PETSc's KSPSolve (linear solves, factorizations included) and in SNES solves
+        #: altogether (the rest of which is VI/active-set work, line searches and vector work)
+        self.timings = {"kernel": 0.0, "residual": 0.0, "jacobian": 0.0, "linear_solve": 0.0,
+                        "snes": 0.0}
+        self._assembly = StepAssembly(fields, self.bcs, refresh, variables, self._nodal,
+                                      self.scale, load, point_forces, self.timings)
+        self._x, self._A, self._b = self._assembly.x, self._assembly.A, self._assembly.b
         comm = self.u.function_space.mesh.comm
         self.prefix = options_prefix or f"vpcontact_step_{next(_counter)}_"
         self.snes = PETSc.SNES().create(comm)
@@ -132,34 +143,6 @@ class StepSolver:
     def _driven(self) -> bool:
         """An obstacle driven by a force: P appends unknowns (it is not square)."""
         return self._P is not None and not self._P.square
-
-    def _create_vectors(self, load, point_forces) -> None:
-        """SNES's vectors and matrix, the physical ones (with P), and the applied loads'."""
-        fields, variables, u = self.fields, self._P, self.u
-        driven = self._driven
-        self._b = variables.create_vector() if driven else fields.create_vector()
-        self._xp = fields.physical_vector()  # the physical unknowns (u's own vector for u alone)
-        self._columns = fields.column_scales(self.scale)  # None: every column scaled by scale
-        self._load = fem.form(load) if load is not None else None
-        self._load_vec = u.vector.duplicate() if load is not None or point_forces is not None else None
-        self._bc_dofs = np.concatenate([bc.dof_indices()[0] for bc in self.bcs] or
-                                       [np.zeros(0, dtype=np.int32)])
-        self._b_free = None  # residual without Dirichlet conditions (the round-off scale)
-        self._point_forces = point_forces
-        self._step_key = None  # (t_n, k) of the solve under way (jacobian_per_step)
-        self._jacobian_step_key = None  # ... and of the assembled Jacobian
-        self._jacobian_dt: Optional[float] = None  # step size of the assembled constant Jacobian
-        self._restored_jacobian_dt: Optional[float] = None  # the same before a restart
-        self.dt = 0.0  # set by the owner before each solve (only the constant-Jacobian reuse reads it)
-        self._A = fields.create_matrix()
-        self._b_phys = self._A_phys = None  # physical residual and Jacobian (with P)
-        if variables is not None:
-            self._b_phys = fields.create_vector()
-            self._A_phys = self._A
-            fields.assemble_jacobian(self._A_phys, self.bcs)  # a pattern for PtAP
-            self._A = variables.jacobian(self._A_phys)
-        self._x = variables.create_vector() if driven else fields.create_vector()
-        self._xs = None  # scratch: the physical unknowns in SNES units (with P)
 
     def _choose_linear_solver(self, linear: str, user_options: dict) -> dict:
         """The linear solver by ``[solver] linear`` and the size (:mod:`.linear`), and the
@@ -218,20 +201,21 @@ class StepSolver:
         self._bounds = None
         mesh = self.u.function_space.mesh
         self._vi = VIBounds(self.fields, self._P, self.scale, mesh_extent(mesh), mesh.comm)
-        self._loaded = self._x.duplicate()  # the iterate whose refresh is current
-        self._loaded_valid = False
         self.total_iterations = 0
         self.jacobian_assemblies = 0
         self.last_reason = ""  # converged reason of the last successful solve
         self.vi_solves = 0  # SNES VI runs (Signorini steps not settled by plain Newton)
-        self.kernel_calls = 0
-        #: wall time [s] spent in the refresh hook (kernels), residual and Jacobian assembly,
-        #: in PETSc's KSPSolve (linear solves, factorizations included) and in SNES solves
-        #: altogether (the rest of which is VI/active-set work, line searches and vector work)
-        self.timings = {"kernel": 0.0, "residual": 0.0, "jacobian": 0.0, "linear_solve": 0.0,
-                        "snes": 0.0}
         PETSc.Log.begin()  # PETSc's event log, for the time spent in KSPSolve
         self._ksp_event = PETSc.Log.Event("KSPSolve")
+
+    @property
+    def kernel_calls(self) -> int:
+        """Runs of the refresh hook (the kernels)."""
+        return self._assembly.kernel_calls
+
+    @kernel_calls.setter
+    def kernel_calls(self, value: int) -> None:
+        self._assembly.kernel_calls = value
 
     # (kept for the tests that set or read them)
     @property
@@ -267,7 +251,7 @@ class StepSolver:
         return self._types.unread_after_solves(self._reads, self.u.function_space.mesh.comm)
 
     def _setup(self, snes: PETSc.SNES) -> None:
-        snes.setFunction(self._residual, self._b)
+        snes.setFunction(self._assembly.residual, self._b)
         snes.setJacobian(self._jacobian, self._A)
         snes.setFromOptions()
         snes.getKSP().setFromOptions()
@@ -350,61 +334,6 @@ class StepSolver:
             self._block, lag, aimed, self._bounds)
         self.test.aimed = aimed
 
-    def _load_iterate(self, x: PETSc.Vec) -> None:
-        # SNES may evaluate at vectors other than the solution: always copy x into u first.
-        # The Jacobian is usually requested at the iterate whose residual was just computed:
-        # then u and the quadrature state are current and the kernel need not run again.
-        if self._loaded_valid and x.equal(self._loaded):
-            return
-        start = _time.perf_counter()
-        xp = self._xp
-        if self._P is None:
-            x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
-            x.copy(xp)
-        else:
-            self._P.to_physical(x, xp)
-        if self._columns is not None:
-            xp.pointwiseMult(xp, self._columns)
-        elif self.scale != 1.0:
-            xp.scale(self.scale)
-        self.fields.to_functions(xp)
-        self._refresh()
-        self.kernel_calls += 1
-        x.copy(self._loaded)
-        self._loaded_valid = True
-        self.timings["kernel"] += _time.perf_counter() - start
-
-    def _free_residual_norm(self) -> float:
-        """||F|| at the initial guess with no Dirichlet condition applied: the interior
-        imbalance and, in the Dirichlet rows, the support reactions (physical units)."""
-        self._load_iterate(self._x)
-        if self._b_free is None:
-            self._b_free = self.fields.create_vector()
-        start = _time.perf_counter()
-        self.fields.assemble_residual(self._b_free, self._xp, [], self._free_point_forces())
-        self.timings["residual"] += _time.perf_counter() - start
-        return self._b_free.norm()
-
-    def _free_point_forces(self):
-        """(dofs, values) of the point forces at dofs no Dirichlet condition prescribes, or None."""
-        if self._point_forces is None:
-            return None
-        dofs, values = self._point_forces()
-        keep = ~np.isin(dofs, self._bc_dofs)
-        return dofs[keep], values[keep]
-
-    def _residual(self, snes, x, b_snes) -> None:
-        self._load_iterate(x)
-        start = _time.perf_counter()
-        b = b_snes if self._P is None else self._b_phys
-        # physical units: b = u - g on Dirichlet rows
-        self.fields.assemble_residual(b, self._xp, self.bcs, self._free_point_forces())
-        if self._P is not None:
-            self._P.residual(b, b_snes)
-        for term in self._nodal:
-            term.residual(x, b_snes)
-        self.timings["residual"] += _time.perf_counter() - start
-
     def _jacobian(self, snes, x, A_snes, P) -> None:
         if self.constant_jacobian and self._jacobian_dt == self.dt:
             return  # A unchanged: the preconditioner (factorization) is reused as it is
@@ -413,24 +342,8 @@ class StepSolver:
             # is rebuilt for the new active set (kept, it cost 1.1-2x the Krylov iterations)
             expire_if(self.lagged_lu, multigrid_only=True)
             return
-        self._load_iterate(x)
+        self._assembly.jacobian(x, A_snes, self._bounds)
         start = _time.perf_counter()
-        for term in self._nodal:
-            term.prepare_jacobian(x)
-        A = A_snes if self._P is None else self._A_phys
-        self.fields.assemble_jacobian(A, self.bcs)
-        if self._columns is not None:
-            A.diagonalScale(None, self._columns)  # d(residual)/dx = d(residual)/du * scales
-        elif self.scale != 1.0:
-            A.scale(self.scale)  # d(residual)/dx = d(residual)/du * scale
-        if self._P is not None:
-            self._P.jacobian(A, A_snes)
-            self._P.stabilize(A_snes, x, self._b, self._bounds)
-        if self._nodal and not all(term.current(x) for term in self._nodal):
-            # (the line search's last residual was elsewhere: λ must be read at x)
-            self.read_multipliers(x)
-        for term in self._nodal:
-            term.jacobian(x, A_snes)
         if self._block is not None:
             self._block.update()
         self._jacobian_dt = self.dt
@@ -454,11 +367,14 @@ class StepSolver:
                 the last iterate and must not be used as a result.
         """
         self._step_key = (time, self.dt)
-        self._assemble_loads()
-        self._initial_guess()
+        self.test.force_scale = self._assembly.assemble_loads()
+        self._assembly.initial_guess()
+        if self._bounds is not None:
+            self._vi.snap(self._x)
         self.predict()  # (new step: same u, but new dt, loads and committed state)
         start = _time.perf_counter()  # (kernel and assembly outside SNES count as SNES work,
-        self.test.round_off_scale = max(self.test.force_scale, self._free_residual_norm())
+        self.test.round_off_scale = max(self.test.force_scale,
+                                        self._assembly.free_residual_norm())
         self.timings["snes"] += _time.perf_counter() - start  # so that the split adds up)
         its = 0
         snes = self.snes
@@ -478,42 +394,6 @@ class StepSolver:
         self._end_solve(snes, reason, its, time, step)
         return its
 
-    def _assemble_loads(self) -> None:
-        """The applied loads' vector of the step and its norm (the force scale)."""
-        self.test.force_scale = 0.0
-        if self._load_vec is None:
-            return
-        with self._load_vec.localForm() as local:
-            local.set(0.0)
-        if self._load is not None:
-            fem_petsc.assemble_vector(self._load_vec, self._load)
-        self._load_vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        if self._point_forces is not None:
-            dofs, values = self._point_forces()
-            self._load_vec.array[dofs] += values
-        fem_petsc.set_bc(self._load_vec, self.bcs, scale=0.0)
-        self.test.force_scale = self._load_vec.norm()
-
-    def _initial_guess(self) -> None:
-        """SNES's x from the fields (scaled, in P's unknowns, snapped onto the bounds)."""
-        self.fields.from_functions(self._xp)
-        xs = self._x
-        if self._P is not None:
-            if self._xs is None:
-                self._xs = self._xp.duplicate()
-            self._xp.copy(self._xs)
-            xs = self._xs
-        else:
-            self._xp.copy(xs)
-        if self._columns is not None:
-            xs.pointwiseDivide(xs, self._columns)
-        elif self.scale != 1.0:
-            xs.scale(1.0 / self.scale)
-        if self._P is not None:
-            self._P.to_snes(xs, self._x)
-        if self._bounds is not None:
-            self._vi.snap(self._x)
-
     def _end_solve(self, snes: PETSc.SNES, reason: int, its: int, time: float,
                    step: int) -> None:
         """Load the last iterate (where finite or converged); raise where SNES did not
@@ -522,7 +402,7 @@ class StepSolver:
             bool(np.isfinite(self._x.array).all()), op=MPI.LAND)
         start = _time.perf_counter()
         if reason > 0 or finite:  # (a diverged, non-finite iterate is not loaded: the kernels
-            self._load_iterate(self._x)  # refuse it, and the caller rolls the step back)
+            self._assembly.load_iterate(self._x)  # refuse it, and the caller rolls the step back)
         self.timings["snes"] += _time.perf_counter() - start
         if reason <= 0:
             ksp_reason = snes.getKSP().getConvergedReason()
@@ -551,17 +431,15 @@ class StepSolver:
         iterations); nothing loaded is current any more."""
         for term in self._nodal:
             term.predict(self._x, self._first_try)
-        self._loaded_valid = False
+        self._assembly.loaded_valid = False
 
     def invalidate(self) -> None:
         """x was changed outside SNES: the loaded iterate is no longer current."""
-        self._loaded_valid = False
+        self._assembly.loaded_valid = False
 
     def read_multipliers(self, x: PETSc.Vec) -> None:
         """The residual at x, evaluated for the nodal terms: they read their multipliers λ."""
-        scratch = self._b.duplicate()
-        self._residual(self.snes, x, scratch)
-        scratch.destroy()
+        self._assembly.read_multipliers(x)
 
     def run(self) -> tuple[int, int]:
         """One run of the step's SNES from x: (converged reason, iterations)."""
@@ -592,8 +470,7 @@ class StepSolver:
 
     def destroy(self) -> None:
         """Free the PETSc objects."""
-        for obj in (self.snes, self._free_snes, self._A, self._b, self._x, self._loaded, self._b_free,
-                    self._load_vec, self._A_phys, self._b_phys, self._columns, self._block,
-                    self._xs):
+        for obj in (self.snes, self._free_snes, self._block):
             if obj is not None:
                 obj.destroy()
+        self._assembly.destroy()
