@@ -54,7 +54,7 @@ from benchlib import (check_steps, machine, mesh_size, output_file, positive_flo
 
 from vpcontact.paper import signorini as paper  # noqa: E402
 from vpcontact.solver import StepControl, advance  # noqa: E402
-from vpcontact.solver import pc as linear_solvers  # noqa: E402
+from vpcontact.solver.pc import factory as pc_factory  # noqa: E402
 from vpcontact.solver import vi_linear  # noqa: E402
 from vpcontact.solver.pc import fieldsplit, star_schur  # noqa: E402
 
@@ -94,7 +94,7 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
     coarse = name == "coarse_schur"
     star = not formed and (name in STAR_SCHUR
                            or (name == "as_used" and block.star_schur is not None))
-    options = linear_solvers.lagged_options(True)
+    options = pc_factory.lagged_options(True)
     if coarse:
         options = fieldsplit.coarse_schur_options(options)
     elif star:

@@ -9,7 +9,11 @@ gives the state (u, σ, ε at quadrature points) step after step:
 * :mod:`.dirichlet`: clamped, prescribed-displacement and symmetry parts (:class:`Dirichlet`),
   the rigid-motion check and the support reactions;
 * :mod:`.step_solver`: :class:`StepSolver`, one step as a PETSc SNES solve (VI mode for
-  Signorini), converged reasons checked after every solve;
+  Signorini), converged reasons checked after every solve; a thin wrapper of SNES that composes
+  what SNES evaluates (:mod:`.assembly`), its own options (:mod:`.step_options`), the
+  convergence test (:mod:`.convergence`), the retries of a step built from the nodal terms'
+  protocol (:mod:`.retries`), the line-search policy (:mod:`.line_search`), SNES VI's bounds
+  (:mod:`.vi_bounds`) and linear solver (:mod:`.vi_solver`);
 * :mod:`.vi_linear`: the linear solves inside SNES VI, with factorizations that outlive the
   active set;
 * :mod:`.pc`: the iterative solver's preconditioners (p-multigrid, vertex stars, the mixed

@@ -173,7 +173,7 @@ class StepSolver:
                      comm) -> None:
         """The options (the user's over ``defaults``) read by vpcontact and by the SNES, KSP and
         PC as they are set up; those of the user's that nothing read are refused."""
-        user_options = viewer_flags(user_options)
+        given_options, user_options = user_options, viewer_flags(user_options)
         check_values(user_options)
         self._options = {**defaults, **user_options}
         self._reads = OptionReads(key for key in given if key in self._options)
@@ -185,7 +185,7 @@ class StepSolver:
             self._setup(self.snes)
         except (PETSc.Error, ValueError) as err:
             _forget(self.prefix, self._options)
-            raise rejected_option(err, user_options) from None
+            raise rejected_option(err, given_options) from None
         self._reads.note(self.prefix)
         _forget(self.prefix, self._options)
         self._types = SolverTypes(self.snes, self._linear_given)

@@ -182,7 +182,7 @@ def uses_stars(key: str, value, rows: int, error=ValueError) -> bool:
 
 def uses_coarse_schur(key: str, value, error=ValueError) -> bool:
     """Whether the Schur block of a field split smoothed over the stars takes the cycle's coarse
-    term (:mod:`~vpcontact.solver.pc.coarse_schur`), with ``value`` given for the option ``key``
+    term (:mod:`~vpcontact.solver.pc.coarse_schur`, experimental), with ``value`` given for the option ``key``
     (``pmg_schur_coarse``; ``auto``, the default, is no: the two factorizations cost more time
     than the iterations they save on the paper's 3-D test up to 143 128 unknowns, README)."""
     return bool(_stars_choice(key, value, error))
