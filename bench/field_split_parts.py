@@ -54,8 +54,9 @@ from benchlib import (check_steps, machine, mesh_size, output_file, positive_flo
 
 from vpcontact.paper import signorini as paper  # noqa: E402
 from vpcontact.solver import StepControl, advance  # noqa: E402
-from vpcontact.solver import linear as linear_solvers  # noqa: E402
-from vpcontact.solver import star_schur, vi_linear  # noqa: E402
+from vpcontact.solver.pc import factory as pc_factory  # noqa: E402
+from vpcontact.solver import vi_linear  # noqa: E402
+from vpcontact.solver.pc import fieldsplit, star_schur  # noqa: E402
 
 #: the exact counterparts: (A by MUMPS, Schur complement formed, other options) per variant
 VARIANTS = {"as_used": (False, False, {}), "cell_weights": (False, False, {}),
@@ -93,11 +94,11 @@ def _inner(solver, block, matrix, exact_a: bool, formed: bool, extra: dict,
     coarse = name == "coarse_schur"
     star = not formed and (name in STAR_SCHUR
                            or (name == "as_used" and block.star_schur is not None))
-    options = linear_solvers.lagged_options(True)
+    options = pc_factory.lagged_options(True)
     if coarse:
-        options = linear_solvers.coarse_schur_options(options)
+        options = fieldsplit.coarse_schur_options(options)
     elif star:
-        options = linear_solvers.star_schur_options(options)
+        options = fieldsplit.star_schur_options(options)
     options.update(extra)
     if exact_a:
         options.update({"fieldsplit_u_pc_type": "lu",

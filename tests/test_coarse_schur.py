@@ -9,7 +9,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact.errors import SolverOptionError
-from vpcontact.solver import coarse_schur
+from vpcontact.solver.pc import coarse_schur
 import flowing_beam
 
 COMM = MPI.COMM_WORLD

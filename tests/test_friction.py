@@ -417,16 +417,16 @@ def test_signorini_full_slip(kind):
 
 def _count_predictor_runs(monkeypatch) -> list:
     """A list that grows by one entry each time a step goes through the Tresca predictor."""
-    from vpcontact.solver import step_solver
+    from vpcontact.solver import retries
 
     predicted = []
-    original = step_solver.StepSolver._predictor
+    original = retries.Predictor.run
 
     def counted(solver, terms):
         predicted.append(True)
         return original(solver, terms)
 
-    monkeypatch.setattr(step_solver.StepSolver, "_predictor", counted)
+    monkeypatch.setattr(retries.Predictor, "run", counted)
     return predicted
 
 

@@ -341,7 +341,7 @@ def test_p_multigrid_interpolation_is_exact_on_p1_fields(rotated):
     from dolfinx import fem
     from petsc4py import PETSc
 
-    from vpcontact.solver.p_multigrid import CoarseSpace
+    from vpcontact.solver.pc.p_multigrid import CoarseSpace
 
     msh = dmesh.create_box(COMM, [np.zeros(3), np.array([2.0, 1.0, 1.0])], [4, 2, 2])
     V = fem.FunctionSpace(msh, ufl.VectorElement("Lagrange", msh.ufl_cell(), 2))

@@ -13,7 +13,7 @@ from mpi4py import MPI
 
 from vpcontact import _cpp
 from vpcontact.errors import SolverOptionError
-from vpcontact.solver import star_smoother
+from vpcontact.solver.pc import star_smoother
 import flowing_beam
 
 COMM = MPI.COMM_WORLD
@@ -210,7 +210,8 @@ def test_the_stars_smooth_large_blocks_by_default(above, stars, monkeypatch):
     displacement block on (here the threshold moved to the size of the paper's 3-D test on
     6×2×2 cells, and one row above it), with Chebyshev–Jacobi below."""
     from vpcontact.paper import signorini as paper
-    from vpcontact.solver import StepControl, advance, p_multigrid
+    from vpcontact.solver import StepControl, advance
+    from vpcontact.solver.pc import p_multigrid
 
     problem = paper.signorini_3d(6, 2, 2, petsc_options={}, sigma_y=paper.SIGMA_Y,
                                  mu_star=paper.MU_STAR, formulation="mixed", degree=2,

@@ -9,9 +9,15 @@ gives the state (u, σ, ε at quadrature points) step after step:
 * :mod:`.dirichlet`: clamped, prescribed-displacement and symmetry parts (:class:`Dirichlet`),
   the rigid-motion check and the support reactions;
 * :mod:`.step_solver`: :class:`StepSolver`, one step as a PETSc SNES solve (VI mode for
-  Signorini), converged reasons checked after every solve;
+  Signorini), converged reasons checked after every solve; a thin wrapper of SNES that composes
+  what SNES evaluates (:mod:`.assembly`), its own options (:mod:`.step_options`), the
+  convergence test (:mod:`.convergence`), the retries of a step built from the nodal terms'
+  protocol (:mod:`.retries`), the line-search policy (:mod:`.line_search`), SNES VI's bounds
+  (:mod:`.vi_bounds`) and linear solver (:mod:`.vi_solver`);
 * :mod:`.vi_linear`: the linear solves inside SNES VI, with factorizations that outlive the
   active set;
+* :mod:`.pc`: the iterative solver's preconditioners (p-multigrid, vertex stars, the mixed
+  formulation's field split), behind one factory;
 * :mod:`.stepping`: step control (halve a failed step, adaptive steps from a local error estimate,
   :mod:`.error_estimate`) and :func:`advance`, the time loop as a generator of accepted steps.
 """
@@ -23,8 +29,8 @@ from vpcontact.solver.problem import QuasistaticProblem, StepReport, stress_quad
 from vpcontact.solver.snes_options import DEFAULT_OPTIONS, reason_name, time_split
 from vpcontact.solver.step_solver import StepSolver
 from vpcontact.solver.stepping import Cut, StepControl, advance
-from vpcontact.solver.vi_linear import (LaggedDirectSolve, LaggedMultigrid, options_in_database,
-                                        rigid_body_modes)
+from vpcontact.solver.near_nullspace import rigid_body_modes
+from vpcontact.solver.vi_linear import LaggedDirectSolve, LaggedMultigrid, options_in_database
 
 __all__ = ["advance", "Cut", "DEFAULT_OPTIONS", "Dirichlet", "DirichletParts",
            "extrapolation_weights", "LaggedDirectSolve", "LaggedMultigrid", "Loads",

@@ -32,6 +32,7 @@ from vpcontact.solver.error_estimate import extrapolation_weights, milne_factor,
 from vpcontact.errors import (ConvergenceError, InputError, NonFiniteStateError,
                               ObstacleOutOfReach, StepRejected)
 from vpcontact.solver.held import HeldByContacts, check_held
+from vpcontact.solver.line_search import line_search_for
 from vpcontact.solver.step_solver import StepSolver
 from vpcontact.solver.variables import ChangeOfVariables
 from vpcontact.model.fields import Displacement, DisplacementPressure
@@ -212,27 +213,7 @@ class QuasistaticProblem:
         # an update affine in ε_n whose tangent depends on the state (the linearized scheme):
         # the tangent and Jacobian are fixed within a step and change between steps
         self._tangent_per_step = law.linear_in_strain and not law.constant_tangent
-        defaults = {}
-        if not law.linear_in_strain:
-            # Stiff elastic (E ~ 1e8) against soft viscous (μ*/k) branches: full Newton steps
-            # overshoot where points unload; the l2 line search restores convergence.
-            defaults["snes_linesearch_type"] = "l2"
-        elif self._tangent_per_step:
-            # The linearized scheme: each step is a linear problem (a bound-constrained QP with
-            # Signorini), but the soft flowing zones make SNES VI's active set cycle between two
-            # sets with full steps (the paper's 3-D test on 18×6×6 cells: three steps cut after
-            # 50 iterations each); backtracking breaks the cycle (2–6 iterations per step).
-            defaults["snes_linesearch_type"] = "bt"
-        searches = []
-        for part in self.contacts:  # (a part's needs come first: friction's line search)
-            wants = part.snes_defaults(law.linear_in_strain)
-            searches.append(wants.get("snes_linesearch_type"))
-            defaults.update(wants)
-        if "cp" in searches:
-            # parts that disagree: the critical-point search that SNES VI's Coulomb friction
-            # needs (a block pressed by a rigid plane with friction onto a compliant floor with
-            # friction: 1 145 Newton iterations with l2, 680 with cp, in 29 / 22 steps)
-            defaults["snes_linesearch_type"] = "cp"
+        defaults = line_search_for(law, self.contacts)  # (and the parts' other SNES needs)
         normal = ufl.FacetNormal(mesh)
         terms = []
         # A frictionless compliance part's force is its law's: the part's own term R_c,

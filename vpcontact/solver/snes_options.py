@@ -28,7 +28,7 @@ DEFAULT_OPTIONS = {
     "snes_max_it": 50,
     # Stop as diverged once this many Newton iterations in a row have left ||F|| above 10 times
     # its best in the step (the initial residual included): the step is then cut at once
-    # instead of after snes_max_it (0: never). See StepSolver._converged.
+    # instead of after snes_max_it (0: never). See vpcontact.solver.convergence.
     "vpcontact_stagnation_its": 12,
     "ksp_type": "preonly",
     "pc_type": "lu",

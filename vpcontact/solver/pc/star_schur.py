@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """The Schur complement of the mixed formulation's field split, approximated on the vertex stars.
 
-With the vertex-star smoothing (:mod:`~vpcontact.solver.star_smoother`) the displacement block's
+With the vertex-star smoothing (:mod:`~vpcontact.solver.pc.star_smoother`) the displacement block's
 preconditioner already holds every star's block A_s of A factorized. Its local Schur complements,
 summed with the sweep's damping ω,
 
@@ -28,7 +28,8 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from vpcontact.solver import coarse_schur, star_smoother
+import vpcontact.solver.pc.coarse_schur as coarse_schur
+import vpcontact.solver.pc.star_smoother as star_smoother
 
 
 class StarSchur:
@@ -37,12 +38,12 @@ class StarSchur:
     Args:
         is_u, is_p: the fields' index sets in the matrix the field split works on.
         coarse: give the pressure split Ŝ with the cycle's coarse term, solved exactly
-            (:mod:`~vpcontact.solver.coarse_schur`).
+            (:mod:`~vpcontact.solver.pc.coarse_schur`).
     """
 
     def __init__(self, is_u: PETSc.IS, is_p: PETSc.IS, coarse: bool = False):
         self.is_u, self.is_p = is_u, is_p
-        #: the cycle's coarse term, solved exactly with Ŝ (:mod:`~vpcontact.solver.coarse_schur`)
+        #: the cycle's coarse term, solved exactly with Ŝ (:mod:`~vpcontact.solver.pc.coarse_schur`)
         self.coarse = coarse_schur.CoarseSchur(is_p.getComm()) if coarse else None
         #: the field-split PCs by options prefix (their operators are the matrices split:
         #: the SNES Jacobian, SNES VI's full-size matrix M), registered as they are configured

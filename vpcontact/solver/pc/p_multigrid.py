@@ -25,7 +25,7 @@ iterations to 1e−8 at 1 038 / 6 400 / 19 690 / 44 508 / 143 128 unknowns: 51 /
 28 s (GAMG's on the dense P2 graph), the solve 7.4 s instead of 24 s.
 
 S is one damped sweep over the vertex stars, each solved exactly
-(:mod:`~vpcontact.solver.star_smoother`), on displacement blocks of :data:`STARS_FROM` rows or
+(:mod:`~vpcontact.solver.pc.star_smoother`), on displacement blocks of :data:`STARS_FROM` rows or
 more; on smaller ones the KSP ``pmg_smooth_`` (two Chebyshev–Jacobi sweeps). Where the body
 flows, point smoothing leaves the volume-keeping modes of the soft tangent to the Krylov
 method, and its iterations grow with the mesh; the stars reach them, at about 1.4 times the
@@ -34,14 +34,14 @@ cost per Krylov iteration. Options (under the displacement split's prefix, e.g.
 ``pmg_smooth_*`` and ``pmg_coarse_*`` for the KSP smoother and the coarse level.
 
 PETSc creates the context (``pc_type python``, ``pc_python_type`` this module's
-:class:`PMultigrid`) for the displacement split; it finds its spaces through :func:`register`,
-keyed by the step solver's options prefix (the sub-PC's prefix starts with it).
+:class:`PMultigrid`) for the displacement split; it finds its spaces on the PC
+(:func:`~vpcontact.solver.pc.context.get_appctx`: registered by :func:`register` under the step
+solver's options prefix, which the sub-PC's prefix starts with).
 """
 
 from __future__ import annotations
 
 import functools
-import weakref
 from typing import Optional
 
 import numpy as np
@@ -51,8 +51,10 @@ from dolfinx.cpp.fem.petsc import interpolation_matrix
 from petsc4py import PETSc
 
 from vpcontact.errors import SolverOptionError
-from vpcontact.solver import coarse_schur, star_smoother
-from vpcontact.solver.vi_linear import rigid_body_modes
+from vpcontact.solver.near_nullspace import rigid_body_modes
+import vpcontact.solver.pc.coarse_schur as coarse_schur
+import vpcontact.solver.pc.context as context
+import vpcontact.solver.pc.star_smoother as star_smoother
 
 #: Displacement blocks from this many rows on are smoothed over the vertex stars (option
 #: ``pmg_smooth_stars auto``, the default). Measured in the time loop of the paper's 3-D test
@@ -88,13 +90,10 @@ COARSE_OPTIONS = {
     "mg_levels_ksp_max_it": 2,
 }
 
-_SPACES: "weakref.WeakValueDictionary[str, CoarseSpace]" = weakref.WeakValueDictionary()
-
-
 class CoarseSpace:
     """The P1 coarse space of a P2 displacement block: the interpolation P (rows laid out like
     the displacement unknowns of SNES, in its frames) and the coarse rigid-body modes; and the
-    vertex stars of the P2 level's smoother (:func:`~vpcontact.solver.star_smoother.
+    vertex stars of the P2 level's smoother (:func:`~vpcontact.solver.pc.star_smoother.
     vertex_stars`).
 
     Args:
@@ -119,7 +118,7 @@ class CoarseSpace:
         self.modes = rigid_body_modes(self.V1)  # Cartesian: P carries the frames
         self._V = V
         #: the Schur complement assembled from the stars' factors
-        #: (:class:`~vpcontact.solver.star_schur.StarSchur`), where the field split uses it
+        #: (:class:`~vpcontact.solver.pc.star_schur.StarSchur`), where the field split uses it
         self.schur = None
         #: counts the Jacobians assembled (the step solver's); a set-up under the same count
         #: as the last one sees the same tangent, only other identity rows (SNES VI's active set)
@@ -138,18 +137,13 @@ class CoarseSpace:
 
 def register(prefix: str, space: CoarseSpace) -> None:
     """Make ``space`` the coarse space of every :class:`PMultigrid` under options ``prefix``
-    (kept while the caller holds ``space``)."""
-    _SPACES[prefix] = space
+    (kept while the caller holds ``space``; :func:`~vpcontact.solver.pc.context.attach`)."""
+    context.attach(prefix, space)
 
 
 def lookup(prefix: str) -> CoarseSpace:
     """The coarse space registered under the longest key ``prefix`` starts with."""
-    matches = [key for key in _SPACES.keys() if prefix.startswith(key)]
-    if not matches:
-        raise SolverOptionError(f"no P1 coarse space registered for the options prefix "
-                                f"{prefix!r} (pc_type python with vpcontact's p-multigrid "
-                                "needs the mixed formulation's step solver)")
-    return _SPACES[max(matches, key=len)]
+    return context.lookup(prefix)
 
 
 def identity_rows(A: PETSc.Mat, csr=None) -> np.ndarray:
@@ -188,7 +182,7 @@ def uses_stars(key: str, value, rows: int, error=ValueError) -> bool:
 
 def uses_coarse_schur(key: str, value, error=ValueError) -> bool:
     """Whether the Schur block of a field split smoothed over the stars takes the cycle's coarse
-    term (:mod:`~vpcontact.solver.coarse_schur`), with ``value`` given for the option ``key``
+    term (:mod:`~vpcontact.solver.pc.coarse_schur`, experimental), with ``value`` given for the option ``key``
     (``pmg_schur_coarse``; ``auto``, the default, is no: the two factorizations cost more time
     than the iterations they save on the paper's 3-D test up to 143 128 unknowns, README)."""
     return bool(_stars_choice(key, value, error))
@@ -238,7 +232,7 @@ class PMultigrid:
 
     def _create(self, pc: PETSc.PC) -> None:
         prefix = pc.getOptionsPrefix() or ""
-        self.space = lookup(prefix)
+        self.space = context.get_appctx(pc)
         comm = pc.getComm()
         self.smoother = PETSc.KSP().create(comm)
         self.smoother.setOptionsPrefix(prefix + "pmg_smooth_")

@@ -1,5 +1,9 @@
 # SPDX-License-Identifier: MIT
-"""The stars' Schur complement with the cycle's coarse term, solved exactly.
+"""EXPERIMENTAL: the stars' Schur complement with the cycle's coarse term, solved exactly.
+
+Off by default (``pmg_schur_coarse = true`` under both field splits' displacement prefixes turns
+it on): on the paper's 3-D test up to 143 128 unknowns its two factorizations cost more time than
+the Krylov iterations they save. Kept as a research preconditioner; not part of any default path.
 
 The field split's preconditioner is block-triangular: the p-multigrid cycle Ã on the displacement
 block and an approximation of the Schur complement on the pressure block. What the outer Krylov
@@ -8,7 +12,7 @@ C − B Ã⁻¹ Bᵀ, not the exact one: with A factorized and S_p, or with the 
 factorized and the stars' Ŝ, it takes more iterations than the cycle as used (the window's last
 system at 44 508 unknowns: 22 as used, 35 with the coarse level factorized). The cycle's coarse
 correction P A_c⁻¹ Pᵀ contributes B P A_c⁻¹ (B P)ᵀ to its Schur complement, which Ŝ (the vertex
-stars' local Schur complements, :mod:`~vpcontact.solver.star_schur`) lacks. With the coarse
+stars' local Schur complements, :mod:`~vpcontact.solver.pc.star_schur`) lacks. With the coarse
 level solved exactly, the sum
 
     Ŝ₂ = Ŝ − (B P) A_c⁻¹ (B P)ᵀ
@@ -29,6 +33,9 @@ from typing import Optional
 
 import numpy as np
 from petsc4py import PETSc
+
+import vpcontact.solver.pc.context as context
+
 
 def factorize(ksp: PETSc.KSP, matrix: PETSc.Mat) -> None:
     """Set ``ksp`` up to solve with ``matrix`` by MUMPS: Cholesky (LDLᵀ) where ``matrix`` is
@@ -139,18 +146,17 @@ def _stack(blocks: list) -> tuple[PETSc.Mat, PETSc.IS]:
 
 
 class CoarseSchurPC:
-    """The PETSc python PC context of the pressure split (``pc_python_type``
-    ``vpcontact.solver.coarse_schur.CoarseSchurPC``): applies the :class:`CoarseSchur` of the
-    stars' Schur complement registered with the step solver's coarse space, factorized when the
-    displacement split's cycle set up."""
+    """EXPERIMENTAL. The PETSc python PC context of the pressure split (``pc_python_type``
+    ``vpcontact.solver.pc.coarse_schur.CoarseSchurPC``): applies the :class:`CoarseSchur` of
+    the stars' Schur complement registered with the step solver's coarse space (found on the
+    PC, :func:`~vpcontact.solver.pc.context.get_appctx`), factorized when the displacement
+    split's cycle set up."""
 
     def __init__(self):
         self.coarse: Optional[CoarseSchur] = None
 
     def setUp(self, pc: PETSc.PC) -> None:
-        from vpcontact.solver import p_multigrid  # (p_multigrid imports this module)
-
-        schur = p_multigrid.lookup(pc.getOptionsPrefix() or "").schur
+        schur = context.get_appctx(pc).schur
         if schur is None or schur.coarse is None:
             raise RuntimeError("CoarseSchurPC: the stars' Schur complement has no coarse term "
                                "(pmg_coarse_schur needs the vertex-star smoothing)")
