@@ -18,9 +18,11 @@ from vpcontact.model.constitutive import Elastic, Elasticity, LinearRate, Perzyn
 from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.model.obstacle import LevelSet, gap_along_normal, rotation_matrix
 from vpcontact.model.quadrature import QuadratureState
-from vpcontact.model.signorini import (ContactDofs, ContactMonitor, ContactReport, Signorini,
-                                       contact_dofs, variable_bounds)
+from vpcontact.model.contact_monitor import ContactMonitor
+from vpcontact.model.contact_nodes import (ContactDofs, ContactReport, Surface, contact_dofs,
+                                           variable_bounds)
+from vpcontact.model.signorini import Signorini
 
 __all__ = ["ContactDofs", "ContactMonitor", "ContactReport", "Elastic", "Elasticity", "LevelSet",
            "LinearRate", "NormalCompliance", "Perzyna", "PlaneStrain", "QuadratureState",
-           "Signorini", "contact_dofs", "gap_along_normal", "rotation_matrix", "variable_bounds"]
+           "Signorini", "Surface", "contact_dofs", "gap_along_normal", "rotation_matrix", "variable_bounds"]
