@@ -533,15 +533,15 @@ class QuasistaticProblem:
         Dirichlet part exerts on the body, shape (parts, dim), and the total force of the
         obstacles and foundations, shape (dim,) (zero without contact) — with ``per_part`` each
         contact part's, shape (contact parts, dim) —, from the equilibrium residual
-        (σ, ε(v)) - (f, v) - P, P the point loads (see :mod:`vpcontact.solver.dirichlet`;
-        a frictionless compliance part's from its own term, :class:`~vpcontact.solver.support_forces.SupportForces`)
+        (σ, ε(v)) - (f, v) - P, P the point loads (:mod:`vpcontact.solver.dirichlet`; a part
+        that reports its own term's force: from that term, :mod:`~.support_forces`)
 
         With ``split``, a third item: each contact part's force split along the body's outward
         normals ν_i at its nodes, shape (contact parts, 2): the normal force N = −Σ_i f_i·ν_i
         (positive where the obstacle presses) and the magnitude of the tangential resultant
         |Σ_i (f_i − (f_i·ν_i) ν_i)|, f_i the node's share of the part's force. On a flat part
         they are the normal and tangential components of its force; on a curved one, the
-        resultants of the normal pressures and of the friction forces."""
+        resultants of the normal pressures and of the tangential (friction) forces."""
         return self._forces.support_forces(per_part, split)
 
     @property
