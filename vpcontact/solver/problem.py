@@ -534,7 +534,7 @@ class QuasistaticProblem:
         obstacles and foundations, shape (dim,) (zero without contact) — with ``per_part`` each
         contact part's, shape (contact parts, dim) —, from the equilibrium residual
         (σ, ε(v)) - (f, v) - P, P the point loads (:mod:`vpcontact.solver.dirichlet`; a part
-        that reports its own term's force: from that term, :mod:`~.support_forces`)
+        that reports its term's force: from the term, :mod:`vpcontact.solver.support_forces`)
 
         With ``split``, a third item: each contact part's force split along the body's outward
         normals ν_i at its nodes, shape (contact parts, 2): the normal force N = −Σ_i f_i·ν_i
