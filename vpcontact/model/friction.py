@@ -1,5 +1,8 @@
 # SPDX-License-Identifier: MIT
-"""Friction on a normal-compliance part: Coulomb's law with the compliance pressure (the model of
+"""Coulomb and Tresca friction: the laws (:class:`Coulomb`, :class:`Tresca`, behind the
+:class:`FrictionLaw` protocol; :func:`Friction` turns a scene's name into one), what a part with
+friction reports at its nodes (:data:`OUTPUTS`), and friction on a normal-compliance part
+(:class:`CompliantFriction`): Coulomb's law with the compliance pressure (the model of
 Klarbring, Mikelić and Shillor), or Tresca's with a given threshold.
 
 On Γ3 the tangential traction t = σ_τ opposes the slip of the body over the (fixed) foundation
