@@ -104,7 +104,7 @@ class NodalFriction(NodalTerm):
     Jacobian (see the module docstring).
 
     Args:
-        part: the :class:`~vpcontact.model.signorini.SignoriniPart` (framed nodes).
+        part: the :class:`~vpcontact.model.signorini_part.SignoriniPart` (framed nodes).
         shear_modulus: the body's G.
         facet_tags: the mesh's facet tags (Γ3 is ``part.law.tag``), for the nodal areas.
 

@@ -50,7 +50,7 @@ class Signorini:
             ``force_direction`` e, solved with u so that the contact force balances F(t) · e
             (see :class:`DrivenSignoriniPart`); F(t) = |F(t)| e with |F(t)| > 0 for t > 0.
         force_direction: e, the unit vector F(t) keeps (3 coordinates).
-        friction: Coulomb or Tresca friction (:class:`~vpcontact.model.friction.Friction`; see
+        friction: Coulomb or Tresca friction (:class:`~vpcontact.model.friction.FrictionLaw`; see
             :mod:`vpcontact.model.nodal_friction`), or None.
         normals: the direction of the contact force: ``"body"``, the body's outward normal (the
             paper's condition), or ``"obstacle"``, the obstacle's normal where each node's ray

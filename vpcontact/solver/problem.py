@@ -485,8 +485,8 @@ class QuasistaticProblem:
 
     def _refit_driven(self, t: float, n: int) -> int:
         """Obstacles driven by a force: solve again, linearized about the solved d, while the
-        linearized gaps are off by more than REFIT_TOLERANCE × the mesh's extent (see
-        :meth:`~vpcontact.model.signorini.DrivenSignoriniPart.refit`); the Newton iterations."""
+        linearized gaps are off by more than REFIT_TOLERANCE × the mesh's extent (see :meth:`~
+        vpcontact.model.signorini_part.DrivenSignoriniPart.refit`); the Newton iterations."""
         driven = [p for p in self.contacts if p.driven]
         its = 0
         for _ in range(MAX_REFITS):
