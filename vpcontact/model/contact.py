@@ -22,13 +22,38 @@ obstacle only.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Optional, Protocol, Sequence
 
 import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from vpcontact.errors import InputError, ObstacleOutOfReach
+from vpcontact.model.contact_nodes import ContactReport
 from vpcontact.model.frames import Frames
+
+
+@dataclass(frozen=True)
+class NodalOutput:
+    """A quantity a contact part reports at each of its nodes beyond u_ν, the gap and σ_ν
+    (friction's tangential traction, say), for the outputs to record without knowing what it
+    is.
+
+    Attributes:
+        key: its name for :meth:`ContactPart.nodal_values` and in checkpoints
+            (``history_<key>``).
+        column: its column in contact.csv.
+        running: the name of a second column with its running sum over the records, or None.
+        integer: written as an integer (a flag).
+        field: the name of its XDMF field (a P1 field on the contact nodes), or None.
+    """
+
+    key: str
+    column: str
+    running: Optional[str] = None
+    integer: bool = False
+    field: Optional[str] = None
 
 
 class ContactPart(Protocol):
@@ -45,6 +70,9 @@ class ContactPart(Protocol):
         force_dofs: owned unrolled displacement dofs of its nodes (Dirichlet dofs left out):
             its force on the body is the equilibrium residual summed over them.
         node_blocks: owned node (block) indices of its nodes.
+        splits_force: the outputs list its force split into a normal and a tangential part.
+        reports_law_force: its force on the body is its own term's (a frictionless compliant
+            part: R_c assembled at its nodes), not the residual left at its nodes.
     """
 
     name: str
@@ -54,6 +82,8 @@ class ContactPart(Protocol):
     moving: bool
     force_dofs: np.ndarray
     node_blocks: np.ndarray
+    splits_force: bool
+    reports_law_force: bool
 
     def snes_defaults(self, linear_law: bool) -> dict:
         """SNES options the part needs (e.g. the VI solver), under the user's own."""
@@ -63,7 +93,7 @@ class ContactPart(Protocol):
 
     @property
     def nodes(self):
-        """The :class:`~vpcontact.model.signorini.ContactDofs` of the part (normals, gaps)."""
+        """The :class:`~vpcontact.model.contact_nodes.ContactDofs` of the part (normals, gaps)."""
 
     def update(self, time: float) -> None:
         """Move the obstacle to its place at ``time`` (new gaps at the nodes)."""
@@ -90,8 +120,14 @@ class ContactPart(Protocol):
     def pressure(self) -> np.ndarray:
         """σ_ν at this rank's nodes (collective)."""
 
+    def nodal_outputs(self) -> tuple[NodalOutput, ...]:
+        """The quantities it reports at its nodes beyond u_ν, the gap and σ_ν (() for most)."""
+
+    def nodal_values(self, key: str) -> np.ndarray:
+        """This rank's values at its nodes of its :meth:`nodal_outputs` ``key``."""
+
     def report(self):
-        """A :class:`~vpcontact.model.signorini.ContactReport` (bounded parts; collective), or
+        """A :class:`~vpcontact.model.contact_nodes.ContactReport` (bounded parts; collective), or
         None."""
 
     def touching(self, tolerance: float) -> bool:
@@ -133,12 +169,11 @@ def merged_frames(comm, parts: Sequence[ContactPart]) -> Optional[Frames]:
 
 
 def merged_report(comm, parts: Sequence[ContactPart]):
-    """One :class:`~vpcontact.model.signorini.ContactReport` over the bounded parts (active
+    """One :class:`~vpcontact.model.contact_nodes.ContactReport` over the bounded parts (active
     nodes summed, extremes over parts, forces summed), or None without one (collective)."""
     reports = [r for r in (p.report() for p in parts) if r is not None]
     if not reports:
         return None
-    from vpcontact.model.signorini import ContactReport
     return ContactReport(
         active=sum(r.active for r in reports),
         max_penetration=max(r.max_penetration for r in reports),
@@ -148,8 +183,29 @@ def merged_report(comm, parts: Sequence[ContactPart]):
         normal_force=sum(r.normal_force for r in reports))
 
 
-def unrolled(bs: int, blocks: np.ndarray, exclude: np.ndarray) -> np.ndarray:
-    """The unrolled dofs of the node ``blocks`` (block size ``bs``), without those in
-    ``exclude``."""
-    dofs = (np.asarray(blocks, dtype=np.int64)[:, None] * bs + np.arange(bs)).ravel()
-    return dofs[~np.isin(dofs, exclude)].astype(np.int32)
+def moved_parts(comm, parts: Sequence[ContactPart], time: float) -> None:
+    """Each part's obstacle moved to its place at ``time`` (:meth:`ContactPart.update`);
+    collective: a ray that misses on one rank stops every rank with the same
+    :class:`~vpcontact.errors.ObstacleOutOfReach`, naming the part."""
+    message, part_name = None, None
+    for part in parts:
+        try:
+            part.update(time)
+        except InputError as err:
+            message = f"at t = {time:.6g}, where the moving obstacle has gone: {err}"
+            part_name = part.name
+            break
+    found = next(((m, n) for m, n in comm.allgather((message, part_name)) if m), None)
+    if found is not None:
+        raise ObstacleOutOfReach(found[0], part=found[1])
+
+
+def bounded_touching(comm, parts: Sequence[ContactPart], tolerance: float) -> bool:
+    """Whether a node of a bounded part touches its obstacle (within ``tolerance``) on some rank
+    (collective where there is a bounded part)."""
+    bounded = [p for p in parts if p.bounded]
+    if not bounded:
+        return False
+    local = any(p.touching(tolerance) for p in bounded)
+    return comm.allreduce(local, op=MPI.LOR)
+

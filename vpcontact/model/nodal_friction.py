@@ -104,7 +104,7 @@ class NodalFriction(NodalTerm):
     Jacobian (see the module docstring).
 
     Args:
-        part: the :class:`~vpcontact.model.signorini.SignoriniPart` (framed nodes).
+        part: the :class:`~vpcontact.model.signorini_part.SignoriniPart` (framed nodes).
         shear_modulus: the body's G.
         facet_tags: the mesh's facet tags (Γ3 is ``part.law.tag``), for the nodal areas.
 
@@ -162,9 +162,7 @@ class NodalFriction(NodalTerm):
     def _bound(self, lam: np.ndarray) -> np.ndarray:
         if self._frozen is not None:  # the predictor's fixed thresholds, where pressed
             return np.where(lam > 0, self._frozen, 0.0)
-        if self.friction.type == "coulomb":
-            return self.friction.coefficient * lam
-        return self.friction.bound_at(lam, self.part.nodes.points) * self.areas
+        return self.friction.nodal_bound(lam, self.part.nodes.points, self.areas)
 
     def _new_solve(self) -> None:
         """A new guess or predictor stage: no unloading node held yet (see :meth:`_unloading`)."""
@@ -241,6 +239,7 @@ class NodalFriction(NodalTerm):
         # (the crawl stop waits while unloading nodes are held: step_solver.CRAWL_ITERATIONS)
         self.holding = self.comm.allreduce(bool(unloading.any()), op=MPI.LOR)
         driven = self._drive is not None
+        slope = self.friction.threshold_slope  # ∂b/∂λ (Coulomb's 𝔣), or None
         # one (node, tangential slot a, global columns, values of ∂b_τa/∂x̃_col) per row piece
         entries = []
         for i in range(len(self.slots)):
@@ -258,12 +257,12 @@ class NodalFriction(NodalTerm):
                 block = st["bound"][i] / size * k[i] * (np.eye(d) - np.outer(direction, direction))
             block = block * free[:, None]
             own = (start + rows).astype(PETSc.IntType)
-            coulomb = (direction is not None and self.friction.type == "coulomb"
+            coupled = (direction is not None and slope is not None
                        and self._frozen is None and st["lam"][i] > 0)
-            if coulomb:
+            if coupled:
                 cols, values = self.normal_row(A, i)
                 # −∂f/∂x̃ = −f̂ 𝔣 ∂λ/∂x̃ = f̂ 𝔣 s ∂F̃_ν/∂x̃
-                factor = self.friction.coefficient * self.signs[i]
+                factor = slope * self.signs[i]
             for a in range(d):
                 if not free[a]:
                     continue
@@ -272,7 +271,7 @@ class NodalFriction(NodalTerm):
                 if driven:  # slip = … − (τ·e) δ: ∂b_τ/∂δ̃ = −block (τ·e)
                     entries.append((i, a, np.array([self._drive_row], dtype=PETSc.IntType),
                                     np.array([-block[a] @ self._drive[i]])))
-                if coulomb:
+                if coupled:
                     entries.append((i, a, cols, factor * direction[a] * values))
         for i, a, cols, values in entries:
             A.setValues(int(start + self.tangential[i][a]), cols, values,
@@ -351,9 +350,10 @@ class NodalFriction(NodalTerm):
 
     @property
     def second_try(self) -> Optional[int]:
-        """Coulomb: Newton iterations from the sticking guess before the Tresca predictor
-        (:meth:`freeze`); Tresca has fixed thresholds already (None)."""
-        return SECOND_TRY if self.friction.type == "coulomb" else None
+        """A law whose thresholds follow the normal force (Coulomb): Newton iterations from the
+        sticking guess before the Tresca predictor (:meth:`freeze`); a law with fixed thresholds
+        (Tresca) has none (None)."""
+        return SECOND_TRY if self.friction.threshold_slope is not None else None
 
     def freeze(self, stick: bool) -> None:
         """The Tresca predictor of a Coulomb step that the sticking guess did not solve within
@@ -363,8 +363,8 @@ class NodalFriction(NodalTerm):
         Newton with fixed thresholds spreads a slip zone in a few iterations, where Coulomb's,
         whose thresholds move with the iterate, grows it by about one node per iteration
         (README: the dragged block on 256×64 cells, 35 iterations → 22)."""
-        self._frozen = (np.full(len(self._lam), np.inf) if stick
-                        else self.friction.coefficient * self._lam)
+        self._frozen = (np.full(len(self._lam), np.inf) if stick else
+                        self.friction.nodal_bound(self._lam, self.part.nodes.points, self.areas))
         self._new_solve()
 
     def thaw(self) -> None:

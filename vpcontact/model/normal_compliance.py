@@ -64,8 +64,11 @@ from typing import Optional
 
 import numpy as np
 import ufl
+from dolfinx import fem
 
 from vpcontact.errors import InputError
+from vpcontact.model.contact_nodes import Surface, contact_dofs, unrolled
+from vpcontact.model.friction import CompliantFriction
 
 #: δ / h_T of the default Jacobian floor (see the module docstring).
 RELATIVE_TANGENT_FLOOR = 1e-12
@@ -87,8 +90,8 @@ class NormalCompliance:
             or a function x -> UFL expression called with the spatial coordinate of the mesh.
         tangent_floor: δ > 0 in the Jacobian slope α max(p, δ)^(α-1) for α < 1 (a length);
             None: 1e-12 times the cell diameter. Ignored for α = 1.
-        surface: the foundation's surface as a :class:`~vpcontact.model.signorini.Signorini`
-            condition on the same facets (its obstacle, or its gap as a function of points),
+        surface: the foundation's surface (:class:`~vpcontact.model.contact_nodes.Surface`, on
+            the same facets: its obstacle, or its gap as a function of points),
             from which the nodes of Γ3 get their normals and gaps for the outputs; None: a
             constant ``gap``.
         friction: Coulomb or Tresca friction on the part (:mod:`vpcontact.model.friction`), or
@@ -170,7 +173,9 @@ class NormalCompliance:
 class CompliancePart:
     """A normal-compliance part at run time (a :class:`~vpcontact.model.contact.ContactPart`):
     the UFL terms, and the nodes of Γ3 with their normals and gaps for the outputs (located on
-    first use, through the foundation's surface: :attr:`NormalCompliance.surface`)."""
+    first use, through the foundation's surface: :attr:`NormalCompliance.surface`). With
+    friction it composes a :class:`~vpcontact.model.friction.CompliantFriction`
+    (:attr:`friction`), which brings its terms, guess, outputs and checkpoint arrays."""
 
     bounded = False
     driven = False
@@ -178,8 +183,6 @@ class CompliancePart:
 
     def __init__(self, law: NormalCompliance, u, facet_tags, name: str, exclude: np.ndarray,
                  shear_modulus: float = 1.0):
-        from dolfinx import fem
-        from vpcontact.model.contact import unrolled
         V = u.function_space
         self.law, self.name, self.u = law, name, u
         self._facet_tags, self._exclude = facet_tags, exclude
@@ -190,28 +193,18 @@ class CompliancePart:
         self.force_dofs = unrolled(bs, blocks, exclude)
         self.node_blocks = np.unique(self.force_dofs // bs).astype(np.int32)
         self._nodes = None
-        self._u_old = self._t_old = None  # u and the friction traction at the last step
-        self.last_friction = None  # the accepted step's friction_state()
-        if law.friction is not None:
-            from vpcontact.model.friction import STICK_STIFFNESS
-            from vpcontact.model.nodal_areas import facet_sizes
-            self._u_old = fem.Function(V, name="u_old")
-            self._t_old = fem.Function(V, name="friction_traction")
-            # k_t = STICK_STIFFNESS G / h, h the local facet size (a field on Γ3's nodes)
-            h, self._scalar_of = facet_sizes(V, facet_tags, law.tag)
-            self.stick_stiffness = fem.Function(h.function_space, name="stick_stiffness")
-            self.stick_stiffness.x.array[:] = STICK_STIFFNESS * shear_modulus / h.x.array
-            self._stick_first = fem.Constant(V.mesh, 0.0)  # see friction.StickingGuess
-            self._guess = None
+        #: the part's friction (None: frictionless)
+        self.friction: Optional[CompliantFriction] = (
+            None if law.friction is None
+            else CompliantFriction(self, law.friction, facet_tags, shear_modulus))
 
     @property
     def nodes(self):
         if self._nodes is None:
-            from vpcontact.model.signorini import Signorini, contact_dofs
             surface = self.law.surface
             if surface is None:
                 gap = self.law.gap if isinstance(self.law.gap, (int, float)) else 0.0
-                surface = Signorini(self.law.tag, gap=gap)
+                surface = Surface(self.law.tag, gap=gap)
             self._nodes = contact_dofs(self.u.function_space, self._facet_tags, surface,
                                        exclude=self._exclude)
         return self._nodes
@@ -221,22 +214,30 @@ class CompliancePart:
         line search (p ↦ p^α is concave: full steps can overshoot past contact onset and cycle;
         ``cp`` took fewer iterations than ``bt`` in every case measured, see the module
         docstring, and the stiff column of tests/test_normal_compliance_nd.py 4, 2, 2, …
-        iterations from its onset step against 6, 4, 3, …).
-        With friction, the secant (``l2``) line search: where a held load stops pressing (a
-        block clamped at one end, pressed by a rigid plane onto the frictional floor until
-        t = 0.5, then held) full steps cycled between two iterates from both guesses and the
-        step was cut 10 times (291 Newton iterations in the run); ``l2`` takes 20 there (49 in
-        the run), ``cp`` 17 (46). On the dragged block of tests/test_friction.py ``l2`` takes
-        what full steps take (6, 1, 1, 1, 1 pressing, 2, 1, 0, 0, 0 sliding), ``cp`` 7 in the
-        first step; backtracking 40 and cut steps. (With α < 1 and a law linear in ε the
-        part keeps ``cp``, for the onset's overshoot above.)"""
+        iterations from its onset step against 6, 4, 3, …). With friction, what its law asks
+        for on a compliant part (:attr:`~vpcontact.model.friction.FrictionLaw.
+        compliant_snes_defaults`; with α < 1 and a law linear in ε the part keeps ``cp``, for
+        the onset's overshoot above)."""
         if linear_law and self.law.alpha < 1.0:
             return {"snes_linesearch_type": "cp"}
-        return {"snes_linesearch_type": "l2"} if self.law.friction is not None else {}
+        return {} if self.friction is None else self.friction.snes_defaults()
+
+    @property
+    def splits_force(self) -> bool:
+        """With friction the outputs split its force into normal and tangential parts."""
+        return self.friction is not None
+
+    @property
+    def reports_law_force(self) -> bool:
+        """A frictionless part's force is its law's term R_c at its nodes. (With friction the
+        term, assembled after the step, would see the committed slip history instead of the
+        step's: such a part's force is the residual left at its nodes, as a rigid part's is —
+        a sweep's block was 1 % out of balance.)"""
+        return self.friction is None
 
     def terms(self, u, du, v, normal, ds):
         law = self.law
-        if law.friction is not None:
+        if self.friction is not None:
             # One rule for the residual and the Jacobian: left to FFCx, each form gets the degree
             # estimated for its integrand — 10 and 26 for P1, whose friction terms have
             # quotients and roots — and the Jacobian is then not the derivative of the discrete
@@ -246,52 +247,39 @@ class CompliancePart:
             ds = ufl.Measure("ds", domain=ds.ufl_domain(), subdomain_data=ds.subdomain_data(),
                              metadata={"quadrature_degree": degree})
         residual, jacobian = law.residual(u, v, normal, ds), law.jacobian(u, du, v, normal, ds)
-        if law.friction is not None:
-            from vpcontact.model.friction import friction_terms
+        if self.friction is not None:
             pressure = law.pressure(u, normal)
             dpressure = (1.0 / law.mu) * law.slope(u, normal) * ufl.dot(du, normal)
-            r, j = friction_terms(law.friction, u, self._u_old, self._t_old, du, v, normal,
-                                  pressure, dpressure, ds(law.tag), self.stick_stiffness,
-                                  stick_first=self._stick_first)
+            r, j = self.friction.terms(u, du, v, normal, pressure, dpressure, ds(law.tag))
             residual, jacobian = residual + r, jacobian + j
         return residual, jacobian
 
     def friction_state(self) -> Optional[dict]:
         """At this rank's nodes, with friction: the tangential traction t (N, d), the slip
         increment of the step Δu_τ (N, d) and whether the node slips (|t| at its bound)."""
-        if self.law.friction is None:
-            return None
-        from vpcontact.model.friction import return_mapping
-        cd, rows = self.nodes, self.node_rows
-        normals = cd.normals
-        def tangential(values):
-            w = values[rows]
-            return w - np.einsum("ij,ij->i", w, normals)[:, None] * normals
-        slip = tangential(self.u.x.array - self._u_old.x.array)
-        trial = tangential(self._t_old.x.array) - self.nodal_stick_stiffness()[:, None] * slip
-        pressure = -self.law.normal_stress(cd.normal_displacement(self.u) - cd.gap)
-        bound = self.law.friction.bound_at(pressure, cd.points)
-        traction = return_mapping(trial, bound)
-        slips = (np.linalg.norm(trial, axis=1) > bound * (1 + 1e-12)) & (bound > 0)
-        return {"traction": traction, "slip": slip, "slips": slips, "rows": rows}
+        return None if self.friction is None else self.friction.state()
+
+    @property
+    def last_friction(self) -> Optional[dict]:
+        """The accepted step's :meth:`friction_state` (None without friction or before)."""
+        return None if self.friction is None else self.friction.last
 
     def nodal_stick_stiffness(self) -> np.ndarray:
-        """k_t at this rank's contact nodes (``nodes.nodes``)."""
-        from vpcontact.model.nodal_areas import at_blocks
-        return at_blocks(self.u.function_space, self._scalar_of, self.stick_stiffness.x.array,
-                          self.nodes.nodes)
+        """k_t at this rank's contact nodes (``nodes.nodes``; with friction)."""
+        return self.friction.nodal_stick_stiffness()
+
+    def nodal_outputs(self) -> tuple:
+        return () if self.friction is None else self.friction.outputs
+
+    def nodal_values(self, key: str) -> np.ndarray:
+        return self.friction.nodal_values(key)
 
     def update(self, time: float) -> None:
         pass
 
     def solver_terms(self) -> list:
         """With friction, the step's sticking guess (:class:`~vpcontact.model.friction.StickingGuess`)."""
-        if self.law.friction is None:
-            return []
-        if self._guess is None:
-            from vpcontact.model.friction import StickingGuess
-            self._guess = StickingGuess(self, self._stick_first)
-        return [self._guess]
+        return [] if self.friction is None else self.friction.solver_terms()
 
     @property
     def node_rows(self) -> np.ndarray:
@@ -302,7 +290,7 @@ class CompliancePart:
     @property
     def u_old(self):
         """u at the last accepted step (with friction)."""
-        return self._u_old
+        return None if self.friction is None else self.friction.u_old
 
     def pressed_at(self, u) -> np.ndarray:
         """Which of this rank's contact nodes the displacement ``u`` presses into the foundation."""
@@ -310,25 +298,18 @@ class CompliancePart:
         return cd.normal_displacement(u) - cd.gap > 0
 
     def commit(self, time: float, x=None) -> None:
-        if self._u_old is None:
-            return
-        state = self.friction_state()  # the return mapping at the nodes, with the step's slip
-        self.last_friction = state
-        self._t_old.x.array[:] = 0.0
-        self._t_old.x.array[state["rows"]] = state["traction"]
-        self._t_old.x.scatter_forward()
-        self._u_old.x.array[:] = self.u.x.array
+        if self.friction is not None:
+            self.friction.commit()
 
     def state(self) -> dict:
         return {}
 
     def arrays(self) -> dict:
-        return {} if self._t_old is None else {"friction_traction": self._t_old.x.array}
+        return {} if self.friction is None else self.friction.arrays()
 
     def restore(self, state: dict, time: float, arrays: Optional[dict] = None) -> None:
-        if self._u_old is not None:  # (u is the restored one: the slip starts from it)
-            self._u_old.x.array[:] = self.u.x.array
-            self._t_old.x.array[:] = (arrays or {}).get("friction_traction", 0.0)
+        if self.friction is not None:
+            self.friction.restore(arrays or {})
 
     def pressure(self) -> np.ndarray:
         cd = self.nodes

@@ -97,6 +97,16 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
         raise InputError(f"contact point {x} starts inside the obstacle "
                          f"(phi = {f_lo[i]:.3g} < 0)", key="contact.obstacle")
     hi = np.where(f_lo == 0, 0.0, np.nan)
+    lo, hi = _bracket(f, points, normal, lo, hi, max_distance, first_step, may_miss)
+    return _bisect(f, lo, hi)
+
+
+def _bracket(f, points, normal, lo, hi, max_distance, first_step, may_miss):
+    """(lo, hi) with φ(lo) > 0 ≥ φ(hi) on every ray whose ``hi`` is NaN, found by marching
+    out from ``lo`` in steps growing by :data:`MARCH_GROWTH` (``f(s, rays)``: φ at s along
+    the rays); rays that ``may_miss`` and meet nothing within ``max_distance`` get it as both
+    ends, others raise."""
+    n = points.shape[0]
     step = first_step or max_distance / 2.0 ** 20
     s = np.full(n, step)
     open_ = np.isnan(hi)
@@ -119,10 +129,13 @@ def gap_along_normal(phi: LevelSet, points: np.ndarray, normal: np.ndarray, *,
                              f"{normal[i].round(12).tolist()} misses the obstacle within "
                              f"{max_distance:g} (restrict the contact part to where the "
                              "obstacle lies along the normal, or raise contact.max_distance)",
-                                 key="contact.obstacle")
+                             key="contact.obstacle")
         s = np.where(open_, MARCH_GROWTH * s, s)
+    return lo, hi
 
-    # Bisection on [lo, hi] with φ(lo) > 0 ≥ φ(hi): 64 halvings reach machine precision.
+
+def _bisect(f, lo, hi):
+    """Bisection on [lo, hi] with φ(lo) > 0 ≥ φ(hi): 64 halvings reach machine precision."""
     for _ in range(64):
         mid = 0.5 * (lo + hi)
         f_mid = f(mid)

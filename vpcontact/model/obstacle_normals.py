@@ -58,7 +58,7 @@ class ObstacleNormalForce(NodalTerm):
     nodes of one Signorini part (see the module docstring).
 
     Args:
-        part: the :class:`~vpcontact.model.signorini.SignoriniPart` (framed nodes).
+        part: the :class:`~vpcontact.model.signorini_part.SignoriniPart` (framed nodes).
     """
 
     def __init__(self, part):

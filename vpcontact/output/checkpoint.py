@@ -143,10 +143,8 @@ def history_arrays(history) -> dict:
               "history_un": np.array(history.normal_displacement),
               "history_pressure": np.array(history.pressure),
               "history_gap": np.array(history.gaps)}
-    if history.friction:
-        arrays.update({"history_traction": np.array(history.traction),
-                       "history_slip": np.array(history.slip),
-                       "history_slipping": np.array(history.slipping)})
+    arrays.update({f"history_{key}": np.array(records)
+                   for key, records in history.records.items()})
     return arrays
 
 

@@ -226,12 +226,10 @@ class ContactHistory:
         self.times: list[float] = []
         self.normal_displacement: list[np.ndarray] = []
         self.pressure: list[np.ndarray] = []
-        #: friction (when some part has it): per record, |t| and |Δu_τ| of the step and
-        #: whether the node slipped
-        self.friction = any(getattr(p.law, "friction", None) is not None for p in self.parts)
-        self.traction: list[np.ndarray] = []
-        self.slip: list[np.ndarray] = []
-        self.slipping: list[np.ndarray] = []
+        #: what the parts report at their nodes beyond u_ν, gap and σ_ν (each kind once, in
+        #: the parts' order; a part without one reports zeros), and its records
+        self.outputs = _merged(p.nodal_outputs() for p in self.parts)
+        self.records: dict[str, list[np.ndarray]] = {o.key: [] for o in self.outputs}
 
     def _gathered(self, value) -> np.ndarray:
         """``value(part)`` of every part, gathered on rank 0 and joined part after part."""
@@ -248,18 +246,15 @@ class ContactHistory:
         un = self._gathered(lambda p: p.nodes.normal_displacement(self.problem.u))
         pressure = self._gathered(lambda p: p.pressure())
         gap = self._gathered(lambda p: p.nodes.gap)
-        if self.friction:
-            traction, slip, slipping = (self._gathered(lambda p, k=k: friction_at_nodes(p, k))
-                                        for k in ("traction", "slip", "slips"))
+        extra = {key: self._gathered(lambda p, key=key: nodal_values(p, key))
+                 for key in self.records}
         if self.comm.rank == 0:
             self.gaps.append(gap)
             self.times.append(t)
             self.normal_displacement.append(un)
             self.pressure.append(pressure)
-            if self.friction:
-                self.traction.append(traction)
-                self.slip.append(slip)
-                self.slipping.append(slipping)
+            for key, values in extra.items():
+                self.records[key].append(values)
 
     def restore(self, arrays: dict) -> None:
         """The records of a checkpoint (:mod:`vpcontact.output.checkpoint`), on rank 0."""
@@ -270,9 +265,7 @@ class ContactHistory:
             self.normal_displacement = list(arrays["un"])
             self.pressure = list(arrays["pressure"])
             self.gaps = list(arrays["gap"])
-            if self.friction:
-                self.traction, self.slip, self.slipping = (
-                    list(arrays[k]) for k in ("traction", "slip", "slipping"))
+            self.records = {key: list(arrays[key]) for key in self.records}
 
     def closest_approach(self, index: int = 0) -> Optional[dict]:
         """For the part ``index``: whether it ever touched after the initial state (normal
@@ -302,36 +295,55 @@ class ContactHistory:
         position along its normal (it changes when the obstacle moves), ``clearance`` =
         gap − u_normal the current one (0 where the node touches)."""
         several = len(self.parts) > 1
-        friction = ",tangential_traction,slip_increment,slip,slipping" if self.friction else ""
+        header = "".join(f",{o.column}" + (f",{o.running}" if o.running else "")
+                         for o in self.outputs)
 
         def write():
             names = [f",{self.names[i]}" if several else "" for i in self.part]
-            slip_sum = np.zeros(len(self.points))
+            sums = {o.key: np.zeros(len(self.points)) for o in self.outputs if o.running}
             with open(path, "w") as f:
-                f.write("t,x,y,z,u_normal,gap,clearance,pressure" + friction
+                f.write("t,x,y,z,u_normal,gap,clearance,pressure" + header
                         + (",part" if several else "") + "\n")
                 for k, (t, un, gap, p) in enumerate(zip(self.times, self.normal_displacement,
                                                         self.gaps, self.pressure)):
-                    extra = [""] * len(self.points)
-                    if self.friction:
-                        slip_sum += self.slip[k]
-                        extra = [f",{a:.10e},{b:.10e},{c:.10e},{int(d)}" for a, b, c, d in zip(
-                            self.traction[k], self.slip[k], slip_sum, self.slipping[k])]
+                    extra = self._csv_cells(k, sums)
                     for (x, y, z), u_i, g_i, p_i, e, name in zip(self.points, un, gap, p, extra,
                                                                  names):
                         f.write(f"{t:.10g},{x:.10g},{y:.10g},{z:.10g},"
                                 f"{u_i:.10e},{g_i:.10e},{g_i - u_i:.10e},{p_i:.10e}{e}{name}\n")
         on_rank0(self.comm, write)
 
+    def _csv_cells(self, k: int, sums: dict) -> list[str]:
+        """The record ``k``'s cells of :attr:`outputs` per node (``sums``: the running sums,
+        advanced by this record)."""
+        cells = [""] * len(self.points)
+        for o in self.outputs:
+            values = self.records[o.key][k]
+            if o.running:
+                sums[o.key] += values
+            columns = [values] + ([sums[o.key]] if o.running else [])
+            for column in columns:
+                text = ([f",{int(v)}" for v in column] if o.integer
+                        else [f",{v:.10e}" for v in column])
+                cells = [a + b for a, b in zip(cells, text)]
+        return cells
 
-def friction_at_nodes(part, key: str) -> np.ndarray:
-    """Per node of ``part``: |t| ("traction"), |Δu_τ| of the last accepted step ("slip") or
-    whether it slipped ("slips"); zeros before the first step or without friction."""
-    state = getattr(part, "last_friction", None)
-    if state is None:
-        return np.zeros(len(part.nodes.gap))
-    value = state[key]
-    return np.linalg.norm(value, axis=1) if value.ndim == 2 else value.astype(float)
+
+def _merged(outputs) -> tuple:
+    """The :class:`~vpcontact.model.contact.NodalOutput` s of several parts, each key once."""
+    merged = {}
+    for group in outputs:
+        for o in group:
+            merged.setdefault(o.key, o)
+    return tuple(merged.values())
+
+
+def nodal_values(part, key: str) -> np.ndarray:
+    """The output ``key`` at the nodes of ``part`` (this rank): the part's, or zeros where the
+    part does not report it."""
+    if any(o.key == key for o in part.nodal_outputs()):
+        return part.nodal_values(key)
+    return np.zeros(len(part.nodes.gap))
 
 
 def _gather(comm, array: np.ndarray) -> np.ndarray:

@@ -9,8 +9,8 @@ QuasistaticProblem.support_forces`).
 With the applied loads they balance: Σ reactions + Σ contact forces + ∫f_0 + ∫f_2 + point loads
 = 0. ``reactions.csv`` has a column per Dirichlet part and component (``<part>_x`` …), the total
 contact force (``contact_x`` …) and, when the scene has several contact parts, each part's
-(``<part>_x`` …, named after its boundary part). When some part has friction, each part's
-normal force and the magnitude of its tangential force follow (``<part>_normal``,
+(``<part>_x`` …, named after its boundary part). When some part asks for it (friction: its
+``splits_force``), each part's normal force and the magnitude of its tangential force follow (``<part>_normal``,
 ``<part>_tangential``: the ``split`` of :meth:`~vpcontact.solver.problem.QuasistaticProblem.
 support_forces`).
 When a prescribed displacement or an obstacle's translation drives the run, its size is recorded
@@ -26,6 +26,7 @@ from typing import Optional
 import numpy as np
 
 from vpcontact.output.fields import on_rank0
+from vpcontact.output.plots import _pyplot
 
 
 class ForceHistory:
@@ -41,8 +42,9 @@ class ForceHistory:
         self.reactions: list[np.ndarray] = []   # (parts, dim) per time
         self.parts: list[np.ndarray] = []       # (contact parts, dim) per time
         self.driver: list[Optional[float]] = []  # the driving displacement, if any
-        #: with friction: each contact part's (normal force, |tangential force|) per time
-        self.split = any(getattr(p.law, "friction", None) is not None for p in problem.contacts)
+        #: when some part asks for it (friction): each contact part's (normal force,
+        #: |tangential force|) per time
+        self.split = any(p.splits_force for p in problem.contacts)
         self.components: list[np.ndarray] = []  # (contact parts, 2) per time
 
     def record(self, t: float) -> None:
@@ -118,7 +120,7 @@ class ForceHistory:
         }
 
     def _split_summary(self, i: int) -> dict:
-        """Contact part i's normal and tangential force, final and over time (friction)."""
+        """Contact part i's normal and tangential force, final and over time."""
         history = np.array([c[i] for c in self.components]).reshape(-1, 2)
         return {f"{kind}_force": {"final": float(history[-1, k]) if len(history) else None,
                                   "history": history[:, k].tolist()}
@@ -129,7 +131,6 @@ class ForceHistory:
         against the driving displacement (rank 0)."""
         if self.comm.rank != 0 or not self.times:
             return
-        from vpcontact.output.plots import _pyplot
         plt = _pyplot()
         driven = self.driver[-1] is not None
         fig, axes = plt.subplots(1, 2 if driven else 1, figsize=(11 if driven else 6, 4.2))

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import logging
+import sys
 import time as _time
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -20,7 +21,7 @@ from vpcontact.output.lock import check_folder
 #: shows vpcontact's INFO messages on standard output.
 log = logging.getLogger(__name__)
 from vpcontact.solver.problem import QuasistaticProblem
-from vpcontact.model.signorini import ContactReport
+from vpcontact.model.contact_nodes import ContactReport
 from vpcontact.solver.stepping import Cut, StepControl, advance
 
 
@@ -123,16 +124,13 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     """
     parts = parts if parts is not None else RunParts()
     history, forces, stop, checkpoints = parts.history, parts.forces, parts.stop, parts.checkpoints
-    restart, progress = parts.restart, parts.progress
-    name, xdmf, xdmf_every, verbose = options.name, options.xdmf, options.xdmf_every, options.verbose
-    csv_name, xdmf_extra, record = options.csv_name, parts.xdmf_extra, parts.record
+    restart, record = parts.restart, parts.record
     control = StepControl(dt, max_cuts=options.max_cuts, tolerance=options.tolerance)
     if restart is not None:
         restore_control(control, restart)
     comm = problem.mesh.comm
     cells = CellStress(problem.state, getattr(problem.law, "out_of_plane_stress", None),
                        problem.stress_correction_at_points)
-    series = None
     if out is not None:
         check_folder(out)  # (a file there, or a path under one: a located refusal)
         if comm.rank == 0:
@@ -142,55 +140,20 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     if restart is not None:
         _restore_record(record, restart.record)
     start = _time.perf_counter()  # wall_time covers everything output_time counts
-    if out is not None and xdmf:
-        with _timed(record, out):
-            extra = [(f, lambda: None) for f in problem.fields.output_functions()]
-            series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells,
-                                extra=extra + list(xdmf_extra),
-                                append=restart is not None)
-        if series.set_aside is not None:
-            note = (f"{name}.xdmf/.h5 could not be appended to (a run that died while writing "
-                    f"leaves them unreadable): set aside as {series.set_aside.name} and .h5; the "
-                    f"series starts again at the checkpoint's t = {restart.time:g}")
-            record.warnings.append(note)  # (the command line prints them at the end)
+    series = (_open_series(problem, out, options, parts, cells, record)
+              if out is not None and options.xdmf else None)
     if history is None and problem.contact_dofs is not None:
         history = ContactHistory(problem, [p for p in problem.contacts if p.bounded])
-    if restart is not None:
-        if history is not None:
-            history.restore(restart.history)
-        if forces is not None:
-            forces.restore(restart.forces)
-    else:
-        if history is not None:
-            history.record(0.0)
-        if forces is not None:
-            forces.record(0.0)
+    _start_histories(history, forces, restart)
     interrupted = stop.agreed(comm) if stop is not None else None  # a signal during set-up
     try:
         if interrupted and checkpoints is not None:
             with _timed(record, out):
                 checkpoints.write(record, control, history, forces)
         for step in advance(problem, t_final, control) if not interrupted else ():
-            record.times.append(step.time)
-            record.newton_iterations.append(step.newton_iterations)
-            record.reasons.append(step.reason)
-            report: Optional[ContactReport] = problem.contact_report()
-            if report is not None:
-                record.contact.append(report)
             last = step.time >= t_final * (1 - 1e-12)
-            with _timed(record, out):
-                if history is not None:
-                    history.record(step.time)
-                if forces is not None:
-                    forces.record(step.time)
-                if series is not None and (step.step % xdmf_every == 0 or last):
-                    series.write(step.time)
-            if progress is not None:
-                progress(step, report)
-            if verbose and comm.rank == 0:
-                active = f"  active contact dofs {report.active:4d}" if report else ""
-                log.info("step %4d  t = %.4f  Newton its %d%s", step.step, step.time,
-                         step.newton_iterations, active)
+            _record_step(problem, step, last, record, out, options, parts.progress,
+                         (history, forces, series))
             interrupted = stop.agreed(comm) if stop is not None else None
             if last:  # a signal during the last step came too late: the run is done
                 interrupted = None
@@ -207,25 +170,90 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         raise
     finally:
         record.cuts = list(control.cuts)
-        with _timed(record, out):
-            if series is not None:
-                series.close()
-        cells.update()
-        with _timed(record, out):
-            if out is not None and history is not None and csv_name:
-                history.write_csv(Path(out) / csv_name)
-            if out is not None and forces is not None:
-                forces.write_csv(Path(out) / "reactions.csv")
+        _close_outputs(record, out, options, cells, (history, forces, series))
         record.wall_time = _time.perf_counter() - start
     record.interrupted = interrupted
     return record, history, cells
+
+
+def _open_series(problem, out: Path, options: RunOptions, parts: RunParts, cells: CellStress,
+                 record: RunRecord) -> XdmfSeries:
+    """The XDMF series of u, the cell stress and the extra fields (appended to on a restart;
+    an unreadable one is set aside, with a warning in ``record``)."""
+    name, restart = options.name, parts.restart
+    with _timed(record, out):
+        extra = [(f, lambda: None) for f in problem.fields.output_functions()]
+        series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells,
+                            extra=extra + list(parts.xdmf_extra),
+                            append=restart is not None)
+    if series.set_aside is not None:
+        note = (f"{name}.xdmf/.h5 could not be appended to (a run that died while writing "
+                f"leaves them unreadable): set aside as {series.set_aside.name} and .h5; the "
+                f"series starts again at the checkpoint's t = {restart.time:g}")
+        record.warnings.append(note)  # (the command line prints them at the end)
+    return series
+
+
+def _start_histories(history, forces, restart: Optional[Restart]) -> None:
+    """The contact and force histories from a checkpoint's records, or from the initial
+    state's."""
+    if restart is not None:
+        if history is not None:
+            history.restore(restart.history)
+        if forces is not None:
+            forces.restore(restart.forces)
+    else:
+        if history is not None:
+            history.record(0.0)
+        if forces is not None:
+            forces.record(0.0)
+
+
+def _record_step(problem, step, last: bool, record: RunRecord, out: Optional[Path],
+                 options: RunOptions, progress, outputs: tuple) -> None:
+    """An accepted step into the run record, the histories and (every ``xdmf_every``-th step
+    and the last) the XDMF series; then the progress callback and the log line."""
+    history, forces, series = outputs
+    record.times.append(step.time)
+    record.newton_iterations.append(step.newton_iterations)
+    record.reasons.append(step.reason)
+    report: Optional[ContactReport] = problem.contact_report()
+    if report is not None:
+        record.contact.append(report)
+    with _timed(record, out):
+        if history is not None:
+            history.record(step.time)
+        if forces is not None:
+            forces.record(step.time)
+        if series is not None and (step.step % options.xdmf_every == 0 or last):
+            series.write(step.time)
+    if progress is not None:
+        progress(step, report)
+    if options.verbose and problem.mesh.comm.rank == 0:
+        active = f"  active contact dofs {report.active:4d}" if report else ""
+        log.info("step %4d  t = %.4f  Newton its %d%s", step.step, step.time,
+                 step.newton_iterations, active)
+
+
+def _close_outputs(record: RunRecord, out: Optional[Path], options: RunOptions,
+                   cells: CellStress, outputs: tuple) -> None:
+    """Close the XDMF series, update the cell stress and write the CSV histories."""
+    history, forces, series = outputs
+    with _timed(record, out):
+        if series is not None:
+            series.close()
+    cells.update()
+    with _timed(record, out):
+        if out is not None and history is not None and options.csv_name:
+            history.write_csv(Path(out) / options.csv_name)
+        if out is not None and forces is not None:
+            forces.write_csv(Path(out) / "reactions.csv")
 
 
 def _abort(comm, err: Exception) -> None:
     """End every rank's process: ``err``, unexpected, may be this rank's alone (the others then
     wait in a collective call). The one place in the library that writes to stderr itself: the
     process ends here, before the command line could."""
-    import sys
     print(f"error: internal error on rank {comm.rank}, a bug in vpcontact rather than in the "
           f"scene: {type(err).__name__}: {err}. Aborting the MPI job (the run's outputs are "
           "incomplete); please report it with the scene file.", file=sys.stderr, flush=True)

@@ -22,14 +22,17 @@ from pathlib import Path
 from dataclasses import dataclass
 from typing import Callable, Optional
 
+import dolfinx
 import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
+from petsc4py import PETSc
 
+from vpcontact import __version__
 from vpcontact.errors import Interrupted, ObstacleOutOfReach, OutputError
 from vpcontact.model.constitutive import Perzyna
 from vpcontact.output import checkpoint, plots, runner
-from vpcontact.output.fields import ContactHistory, on_rank0
+from vpcontact.output.fields import ContactHistory, nodal_values, on_rank0
 from vpcontact.output.forces import ForceHistory
 from vpcontact.scene.builder import Model
 from vpcontact.solver.snes_options import time_split
@@ -216,17 +219,15 @@ class Session:
 
     def _pressure_field(self, history):
         """Nodal contact pressure σ_ν as a P1 field (zero off the contact parts; P_k: its
-        vertex values) and, with friction, the tangential traction |σ_τ| and whether each node
-        slipped in the step (1) or not (0)."""
+        vertex values) and the fields of what the parts report at their nodes (with friction
+        the tangential traction |σ_τ| and whether each node slipped in the step, 1, or not, 0:
+        :attr:`ContactHistory.outputs` with a ``field``)."""
         if history is None:
             return ()
         fields = [self._nodal_field(history, "contact_pressure", lambda part: part.pressure())]
-        if history.friction:
-            from vpcontact.output.fields import friction_at_nodes
-            fields += [self._nodal_field(history, name, lambda part, key=key:
-                                         friction_at_nodes(part, key))
-                       for name, key in (("tangential_traction", "traction"),
-                                         ("slipping", "slips"))]
+        fields += [self._nodal_field(history, o.field, lambda part, key=o.key:
+                                     nodal_values(part, key))
+                   for o in history.outputs if o.field is not None]
         return fields
 
     def _nodal_field(self, history, name: str, values):
@@ -335,9 +336,6 @@ def _bounds(problem, axis: int):
 
 
 def _versions() -> dict:
-    import dolfinx
-    from petsc4py import PETSc
-    from vpcontact import __version__
     return {"vpcontact": __version__, "dolfinx": dolfinx.__version__,
             "petsc": ".".join(map(str, PETSc.Sys.getVersion())), "python": sys.version.split()[0],
             "platform": platform.platform()}

@@ -22,7 +22,7 @@ from mpi4py import MPI
 
 from vpcontact.model.extent import mesh_extent
 from vpcontact.model.constitutive import Elastic, Elasticity, LinearRate, Perzyna, PlaneStrain
-from vpcontact.model.friction import Friction
+from vpcontact.model.friction import Friction, FrictionLaw
 from vpcontact.model.normal_compliance import NormalCompliance
 from vpcontact.errors import InputError, SolverOptionError
 from vpcontact.solver.loads import Loads, PointLoad
@@ -33,7 +33,8 @@ from vpcontact.scene.finite import check_assembled_loads, check_finite
 from vpcontact.scene.gmsh_files import gmsh_session
 from vpcontact.scene.specs import ObstacleShape
 from vpcontact.model.obstacle import rotation_matrix, shape_level_set
-from vpcontact.model.signorini import Signorini, axis_aligned_normal, contact_dofs
+from vpcontact.model.contact_nodes import Surface, axis_aligned_normal, contact_dofs
+from vpcontact.model.signorini import Signorini
 from vpcontact.solver.dirichlet import Dirichlet
 
 _CELL_TYPES = {"interval": dmesh.CellType.interval, "triangle": dmesh.CellType.triangle,
@@ -347,14 +348,14 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
     if spec.type == "normal_compliance":
         if spec.obstacle is not None:
             phi, _ = obstacle_level_set(spec, scene.dim)
-            surface = Signorini(tag, obstacle=phi, max_distance=spec.max_distance or 1e3)
+            surface = Surface(tag, obstacle=phi, max_distance=spec.max_distance or 1e3)
             g = _foundation_gap(mesh, facet_tags, surface)
         elif gap is None or gap.is_constant:
             g = 0.0 if gap is None else gap.value()
             surface = None
         else:
             g = gap.ufl(ufl.SpatialCoordinate(mesh), 0.0)
-            surface = Signorini(tag, gap=lambda x: gap.numpy(x))
+            surface = Surface(tag, gap=lambda x: gap.numpy(x))
         return NormalCompliance(tag, mu=spec.mu, alpha=spec.alpha, gap=g, surface=surface,
                                 friction=_friction(spec.friction))
     if spec.obstacle is not None and spec.force is not None:
@@ -384,16 +385,17 @@ def _condition(scene: Scene, spec, tag: int, mesh, facet_tags):
     return Signorini(tag, gap=lambda x: gap.numpy(x), friction=_friction(spec.friction))
 
 
-def _friction(spec) -> Optional[Friction]:
-    """The friction law of a contact table (None: frictionless)."""
+def _friction(spec) -> Optional[FrictionLaw]:
+    """The friction law of a contact table (None: frictionless), from the friction module's
+    factory."""
     if spec is None:
         return None
-    if spec.type == "coulomb":
-        return Friction("coulomb", coefficient=spec.coefficient)
     threshold = spec.threshold
-    if threshold.is_constant:
-        return Friction("tresca", threshold=threshold.value())
-    return Friction("tresca", threshold=lambda x: threshold.ufl(x, 0.0),
+    if threshold is None or threshold.is_constant:
+        return Friction(spec.type, coefficient=spec.coefficient,
+                        threshold=None if threshold is None else threshold.value())
+    return Friction(spec.type, coefficient=spec.coefficient,
+                    threshold=lambda x: threshold.ufl(x, 0.0),
                     threshold_at=lambda x: threshold.numpy(x))
 
 
@@ -429,7 +431,7 @@ def _force_direction(scene: Scene, force) -> tuple:
     return tuple(direction) + (0.0,) * (3 - len(direction))
 
 
-def _foundation_gap(mesh, facet_tags, surface: Signorini):
+def _foundation_gap(mesh, facet_tags, surface: Surface):
     """Normal compliance against a foundation surface: g at each node of Γ3 is the distance to
     it along the node's normal (as for a Signorini obstacle), interpolated by P1 functions."""
     V = fem.VectorFunctionSpace(mesh, ("Lagrange", 1))

@@ -30,6 +30,7 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from vpcontact.errors import InputError
+from vpcontact.solver.dirichlet import rigid_mode_expressions
 
 #: ε relative to G / L².
 STIFFNESS = 1e-8
@@ -50,7 +51,6 @@ class HeldByContacts:
 
     def __init__(self, u: fem.Function, free: Sequence[tuple[str, np.ndarray]],
                  shear_modulus: float):
-        from vpcontact.solver.dirichlet import rigid_mode_expressions
         V = u.function_space
         mesh = V.mesh
         self.u = u
@@ -114,7 +114,6 @@ def check_held(mesh, free: Sequence[tuple[str, np.ndarray]], loads_along, contac
     """Refuse (InputError at ``boundary``) a free rigid motion along which the loads push
     (``loads_along(coefficients)``: (their generalised force on the motion, its scale)) while
     no contact part can resist it (m · ν = 0 on every contact face)."""
-    from vpcontact.solver.dirichlet import rigid_mode_expressions
     comm = mesh.comm
     x = mesh.geometry.x
     lo = np.min(comm.allgather(x.min(axis=0)), axis=0)

@@ -9,8 +9,9 @@ Two reasons to change variables, both at the nodes of Signorini contact parts:
   direction e) translates by an unknown d along e, solved with u in the same Newton iteration so
   that the contact force on it balances F(t). With the gaps of its nodes linear in d over a step,
   g_i(d) = g_i(d_p) + c_i δ, δ = d − d_p (d_p the step's predicted d; c_i = e · ν_i, see
-  :class:`~vpcontact.model.signorini.DrivenSignoriniPart`), the condition u_ν,i ≤ g_i(d) becomes
-  the bound w_i ≤ g_i(d_p) on w_i = u_ν,i − c_i δ. SNES works on x̃ = (w̃, δ̃): u = R w̃ + N δ,
+  :class:`~vpcontact.model.signorini_part.DrivenSignoriniPart`), the condition
+  u_ν,i ≤ g_i(d) becomes the bound w_i ≤ g_i(d_p) on w_i = u_ν,i − c_i δ.
+  SNES works on x̃ = (w̃, δ̃): u = R w̃ + N δ,
   where R holds the frames and the column of N for obstacle j is c_ij ν_i at each of its nodes.
   (The unknown is the increment δ, not d itself: SNES VI decides which bounds are active with an
   absolute tolerance, which the round-off of w = u_ν − c d would exceed once d is large.)

@@ -45,6 +45,7 @@ import ufl
 from dolfinx import fem
 from mpi4py import MPI
 
+from vpcontact import kernels
 from vpcontact.scene.gmsh_files import gmsh_session
 from vpcontact.studies.hertz import read_msh  # reads these meshes too
 
@@ -116,7 +117,6 @@ def yield_radii(model: str, sigma_y: float = 1.0) -> tuple[float, float]:
     """(uniaxial, shear) yield stresses of a kernel model, measured with
     :func:`vpcontact.kernels.yield_function`: the yield function is a quadratic form, so the
     stress t·τ₀ on the surface τ·Yτ = σ_Y² has t = σ_Y/√(τ₀·Yτ₀)."""
-    from vpcontact import kernels
     uniaxial = np.zeros((1, 3, 3))
     uniaxial[0, 0, 0] = 1.0
     shear = np.zeros((1, 3, 3))
@@ -255,7 +255,6 @@ def max_yield_ratio(problem) -> float:
     """max over the quadrature points of √(τ·Yτ)/σ_Y for a :class:`PlaneStrain` Perzyna problem
     (τ the 3-D stress with the law's σ33; Y the law's own yield form): 1 on the yield surface,
     1 + (viscous overstress)/σ_Y outside it. Collective (max over ranks)."""
-    from vpcontact import kernels
     plane = problem.law
     model = plane.elasticity.model
     stress = problem.state.view(problem.state.stress)

@@ -30,6 +30,8 @@ import numpy as np
 from mpi4py import MPI
 
 from vpcontact.errors import InputError, VpcontactError
+from vpcontact.paper import bar1d
+from vpcontact.scene import builder
 from vpcontact.solver.stepping import StepControl, advance
 
 
@@ -74,7 +76,6 @@ class Run:
 # -- exact solutions --------------------------------------------------------------------------
 
 def _paper_1d(scene) -> Callable[[np.ndarray, float], np.ndarray]:
-    from vpcontact.paper import bar1d
     c = scene.contact  # the first (the bar has one)
     same = (scene.dim == 1 and scene.law.type == "linear" and scene.material.E == bar1d.YOUNG
             and scene.law.a.value() == bar1d.G_A and scene.law.b.value() == bar1d.G_B
@@ -186,9 +187,8 @@ class _Sampler:
 
 def execute(scene, grid: Grid, run: Run, comm=MPI.COMM_WORLD) -> Run:
     """Build and run one variant; fills the run's cost and samples, or ``skipped``."""
-    from vpcontact.scene.builder import build
     try:
-        model = build(variant_scene(scene, grid, run), comm)
+        model = builder.build(variant_scene(scene, grid, run), comm)
     except VpcontactError as err:  # e.g. an explicit law beyond its stability limit
         run.skipped = str(err).split(": ")[-1]
         return run
