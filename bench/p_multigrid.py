@@ -1,7 +1,7 @@
 # SPDX-License-Identifier: MIT
 """Benchmark: the displacement block's preconditioner in the mixed formulation's field split —
 one GAMG V-cycle on P2 against vpcontact's two-level p-multigrid (P2 smoothing, a P1 Galerkin
-coarse problem under GAMG; :mod:`vpcontact.solver.p_multigrid`): ``p_multigrid`` smooths over
+coarse problem under GAMG; :mod:`vpcontact.solver.pc.p_multigrid`): ``p_multigrid`` smooths over
 the vertex stars, ``p_multigrid_chebyshev`` with two Chebyshev–Jacobi sweeps (as before the
 stars).
 

@@ -439,7 +439,7 @@ def test_a_slip_zone_spreading_over_a_fine_face_converges_from_the_sticking_gues
     Tresca predictor (every pressed node stuck, then the thresholds fixed at that iterate's,
     then Coulomb: NodalFriction.freeze): 22 iterations in all (19 / 21 on the coarser meshes,
     27 and no cut on 512×128). Now that second try also stops once 3 iterations have not
-    halved its residual (step_solver.CRAWL_ITERATIONS): 16 (13 / 15, and 21 on 512×128). Most
+    halved its residual (retries.CRAWL_ITERATIONS): 16 (13 / 15, and 21 on 512×128). Most
     of the crawl was three nodes at the face's trailing end, whose cones had shrunk under their
     old forces, thrown across their stick intervals one way and back; linearised on the stick
     branch while that brings them nearer their cones (NodalFriction._unloading), the step
@@ -706,7 +706,7 @@ def test_a_clamped_block_squeezed_onto_a_rigid_floor_with_friction_is_rescued():
     part's rescue line search (``l2``) before it was cut: 50 + 7 Newton iterations in the first
     step. Now the Tresca predictor (NodalFriction.freeze) takes over after 10 iterations (now
     15: nodal_friction.SECOND_TRY) from the sticking guess: 19 in the first step (23 in the run), none cut; 15 (19) since that try
-    also stops where it crawls (step_solver.CRAWL_ITERATIONS); both faces pressed, the forces
+    also stops where it crawls (retries.CRAWL_ITERATIONS); both faces pressed, the forces
     in balance."""
     floor = Signorini(2, obstacle=lambda x: x[1], max_distance=1.0,
                       friction=Friction("coulomb", coefficient=0.3))

@@ -95,7 +95,7 @@ from vpcontact.model.nodal_terms import ON_BOUND, NodalTerm
 #: that converge from it (the dragged block's first pressing step on 256×64 and 512×128
 #: cells, and since unloading nodes stick, its hard dragging step: 10 and 12), below the crawl
 #: of the ones that did not (12–36, README), which the crawl stop
-#: (:data:`~vpcontact.solver.step_solver.CRAWL_ITERATIONS`) now cuts short anyway
+#: (:data:`~vpcontact.solver.retries.CRAWL_ITERATIONS`) now cuts short anyway
 SECOND_TRY = 15
 
 
@@ -236,7 +236,7 @@ class NodalFriction(NodalTerm):
         holds = np.all(xs[self.tangential] == self._predicted, axis=1) & ~moving
         unloading = self._unloading(st, moving)
         holds |= unloading
-        # (the crawl stop waits while unloading nodes are held: step_solver.CRAWL_ITERATIONS)
+        # (the crawl stop waits while unloading nodes are held: retries.CRAWL_ITERATIONS)
         self.holding = self.comm.allreduce(bool(unloading.any()), op=MPI.LOR)
         driven = self._drive is not None
         slope = self.friction.threshold_slope  # ∂b/∂λ (Coulomb's 𝔣), or None

@@ -113,7 +113,7 @@ class NodalTerm:
 
     def has_fallback(self) -> bool:
         """Whether :meth:`fallback` has another initial guess for this step (collective; see
-        :meth:`~vpcontact.solver.step_solver.StepSolver._run_with_fallback`)."""
+        :class:`~vpcontact.solver.retries.OtherGuess`)."""
         return False
 
     def fallback(self, x: PETSc.Vec) -> None:
@@ -121,7 +121,7 @@ class NodalTerm:
 
     #: Newton iterations SNES may take from :meth:`fallback`'s guess before the term's
     #: predictor runs (None: the term has none; see :meth:`freeze` and
-    #: :meth:`~vpcontact.solver.step_solver.StepSolver._predictor`)
+    #: :class:`~vpcontact.solver.retries.Predictor`)
     second_try: Optional[int] = None
 
     def freeze(self, stick: bool) -> None:
@@ -134,5 +134,5 @@ class NodalTerm:
 
     #: True while the term's last Jacobian held nodes that are still on their way to a
     #: solution (friction's unloading nodes): the step solver's crawl stop then waits (same on
-    #: every rank; :data:`~vpcontact.solver.step_solver.CRAWL_ITERATIONS`)
+    #: every rank; :data:`~vpcontact.solver.retries.CRAWL_ITERATIONS`)
     holding: bool = False
