@@ -5,7 +5,7 @@ coarse problem under GAMG; :mod:`vpcontact.solver.p_multigrid`): ``p_multigrid``
 the vertex stars, ``p_multigrid_chebyshev`` with two Chebyshev–Jacobi sweeps (as before the
 stars).
 
-Problem (single linear solves, as ``bench/mixed_pc_prototype.py``): the beam (0,3)×(0,1)×(0,1)
+Problem (single linear solves): the beam (0,3)×(0,1)×(0,1)
 on 3n×n×n tetrahedra, clamped at x = 0, Taylor–Hood P2–P1, E = 1e8, ν = 0.3, the tangent of the
 paper's 3-D test once it flows: G_eff = 10³ on x < 2 (the collapsed shear stiffness), G beyond.
 ``--form dev``: vpcontact's unknowns (p the mean stress, A = 2G_eff dev ε : ε); ``herrmann``:

@@ -18,16 +18,13 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 #: Small valid values per script (a later occurrence of an option replaces them).
 SMALL = {
     "contact_frames": ["--n2d", "2", "--n3d", "1", "--steps", "1", "--repeat", "1"],
-    "field_split_parts": ["--n", "1", "--variants", "as_used", "--t0", "0.02"],
     "friction_scratch": ["--cells", "8", "2", "--k", "0.25"],
     "friction_step": ["--cells", "8", "2"],
     "kernel_throughput": ["--points", "10", "--repeats", "1"],
     "locking_3d": ["--sizes", "1", "--formulations", "p1", "--T", "0.02"],
-    "mixed_pc_prototype": ["--sizes", "1", "--solvers", "mumps"],
     "p_multigrid": ["--sizes", "1", "--forms", "dev", "--variants", "gamg"],
     "scene_dispatch": ["--cells", "4", "2", "--steps", "1"],
     "signorini_step": ["--n", "1", "--dt", "0.5", "--t-final", "0.5"],
-    "solve_trace": ["--n", "1"],
     "step_cost": ["--sizes2d", "--sizes3d", "--ranks", "1"],
     "work_precision_1d": ["--paper-min-r", "0.1", "--bdf2-levels", "1"],
 }
@@ -38,9 +35,6 @@ CASES = [  # (script, bad arguments, the option the error must name)
     ("contact_frames", ["--n3d", "100000"], "--n3d"),  # more cells than dolfinx can number
     ("contact_frames", ["--steps", "0"], "--steps"),
     ("contact_frames", ["--repeat", "-1"], "--repeat"),
-    ("field_split_parts", ["--t0", "nan"], "--t0"),
-    ("field_split_parts", ["--n", "1", "0"], "--n"),
-    ("field_split_parts", ["--sigma-y", "-1"], "--sigma-y"),
     ("friction_scratch", ["--k", "nan"], "--k"),
     ("friction_scratch", ["--k", "0.5"], "--k"),  # the press phase (t <= 0.25) gets no step
     ("friction_scratch", ["--cells", "8", "0"], "--cells"),
@@ -50,10 +44,6 @@ CASES = [  # (script, bad arguments, the option the error must name)
     ("kernel_throughput", ["--repeats", "-3"], "--repeats"),
     ("locking_3d", ["--T", "inf"], "--T"),
     ("locking_3d", ["--sizes", "1", "-2"], "--sizes"),
-    ("mixed_pc_prototype", ["--case", "plastic"], "--case"),
-    ("mixed_pc_prototype", ["--set", "ksp_type"], "--set"),
-    ("mixed_pc_prototype", ["--sizes", "0"], "--sizes"),
-    ("mixed_pc_prototype", ["--mumps-max-n", "-1"], "--mumps-max-n"),
     ("p_multigrid", ["--sizes", "-2"], "--sizes"),
     ("scene_dispatch", ["--steps", "0"], "--steps"),
     ("scene_dispatch", ["--cells", "-1", "2"], "--cells"),
@@ -62,9 +52,6 @@ CASES = [  # (script, bad arguments, the option the error must name)
     ("signorini_step", ["--t-final", "-1"], "--t-final"),
     ("signorini_step", ["--dt", "1e-9"], "--dt"),  # 5e8 steps
     ("signorini_step", ["-o", "snes_type"], "-o"),
-    ("solve_trace", ["--n", "0"], "--n"),
-    ("solve_trace", ["--first-rtol", "-1"], "--first-rtol"),
-    ("solve_trace", ["--first-rtol", "nan"], "--first-rtol"),
     ("step_cost", ["--sizes3d", "-1"], "--sizes3d"),
     ("step_cost", ["--single", "3", "0"], "--single"),
     ("step_cost", ["--single", "4", "2"], "--single"),
@@ -105,8 +92,7 @@ def test_bad_value_is_refused(monkeypatch, capsys, tmp_path, script, argv, optio
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("script", ["contact_frames", "step_cost", "mixed_pc_prototype",
-                                    "solve_trace", "friction_step"])
+@pytest.mark.parametrize("script", ["contact_frames", "step_cost", "friction_step"])
 def test_bad_out_is_refused(monkeypatch, capsys, tmp_path, script):
     """--out an existing folder, or a file under an existing file (a missing folder is made
     when the result is saved)."""
@@ -118,12 +104,3 @@ def test_bad_out_is_refused(monkeypatch, capsys, tmp_path, script):
     refused(monkeypatch, capsys, script, ["--out", str(tmp_path / "plain" / "sub" / "r.json")],
             "--out")
     assert (tmp_path / "plain").read_text() == "keep\n"
-
-
-def test_append_to_an_unreadable_file_is_refused(monkeypatch, capsys, tmp_path):
-    """mixed_pc_prototype --append merges into the file after all its runs: a file that is not
-    its JSON is refused first, and left as it was."""
-    old = tmp_path / "old.json"
-    old.write_text("not JSON\n")
-    refused(monkeypatch, capsys, "mixed_pc_prototype", ["--append", "--out", str(old)], "--append")
-    assert old.read_text() == "not JSON\n"

@@ -429,7 +429,7 @@ def test_schur_weight_is_capped_where_a_thin_zone_flows_and_only_there():
     """The weighted pressure mass matrix of the field split takes each point's shear compliance,
     but at most 10 times that of the mean stiffness of its pressure nodes' cells: a layer one cell
     thick whose tangent is 10⁴ times softer (a thin flowing zone) gets diagonal entries hundreds
-    of times below the uncapped ones at its nodes (bench/field_split_parts.py: the uncapped
+    of times below the uncapped ones at its nodes (bench/field_split_parts.py, in git history: the uncapped
     matrix cost GMRES an iteration per such node); a uniformly soft body, and nodes whose cells
     are all as soft as their neighbours, keep the uncapped entries."""
     soft = 1e-4
