@@ -27,8 +27,9 @@ import numpy as np
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import check_cells, machine, output_file, positive_int, save  # noqa: E402
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from bench.benchlib import check_cells, machine, output_file, positive_int, save  # noqa: E402
 
 from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain, Signorini  # noqa: E402
 from vpcontact.model.friction import Friction  # noqa: E402

@@ -37,12 +37,13 @@ from dolfinx.fem.petsc import assemble_matrix, assemble_matrix_block, assemble_v
 from mpi4py import MPI
 from petsc4py import PETSc
 
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import vpcontact  # noqa: F401  (one BLAS thread per process)
 from vpcontact.solver import linear, p_multigrid
 from vpcontact.solver.vi_linear import rigid_body_modes
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine, mesh_size, output_file, save  # noqa: E402
+from bench.benchlib import machine, mesh_size, output_file, save  # noqa: E402
 
 E, NU, G_PLASTIC, RTOL = 1e8, 0.3, 1e3, 1e-8
 GAMG_U = {"fieldsplit_u_pc_type": "gamg", "fieldsplit_u_pc_gamg_threshold": 0.02,

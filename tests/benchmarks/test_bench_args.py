@@ -8,12 +8,8 @@ no mesh is made). The bad value comes after small valid values of the other opti
 script which let it through would fail fast instead of starting its full-size benchmark."""
 
 import importlib
-import sys
-from pathlib import Path
 
 import pytest
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 
 #: Small valid values per script (a later occurrence of an option replaces them).
 SMALL = {
@@ -68,7 +64,7 @@ CASES = [  # (script, bad arguments, the option the error must name)
 
 def refused(monkeypatch, capsys, script: str, argv: list, option: str) -> str:
     """Run ``script``'s main(argv): exit status 2, ``option`` named on stderr, save() not called."""
-    module = importlib.import_module(script)
+    module = importlib.import_module(f"bench.{script}")
     saved = []
     if hasattr(module, "save"):
         monkeypatch.setattr(module, "save", lambda *a, **k: saved.append(a))

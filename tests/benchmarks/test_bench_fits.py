@@ -2,14 +2,10 @@
 """The step-cost benchmark's exponent fits (bench/step_cost.py) recover known power laws: over
 all sizes, between consecutive sizes, and over the largest sizes only."""
 
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-import step_cost  # noqa: E402
+from bench import step_cost
 
 
 def records(dofs, seconds):

@@ -1,18 +1,15 @@
 # SPDX-License-Identifier: MIT
-"""The C++ kernels agree with bench/numpy_reference.py, an independent numpy implementation of
-the same formulas (projection, explicit and implicit updates with the consistent tangent) — the
-agreement kernel_throughput.py relies on, checked in CI on random inputs of both branches."""
-
-import sys
-from pathlib import Path
+"""The C++ kernels agree with tests/reference/numpy_reference.py, an independent numpy
+implementation of the same formulas (projection, explicit and implicit updates with the
+consistent tangent) — the agreement bench/kernel_throughput.py relies on, checked in CI on random
+inputs of both branches."""
 
 import numpy as np
 import pytest
 
 from vpcontact import kernels
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-import numpy_reference as ref  # noqa: E402
+from tests.reference import numpy_reference as ref
 
 E, NU, SIGMA_Y, MU_STAR = 1e8, 0.3, np.sqrt(10.0), 200.0
 

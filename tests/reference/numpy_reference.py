@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""The Perzyna kernels' mathematics in vectorised numpy (the baseline of kernel_throughput.py).
+"""The Perzyna kernels' mathematics in vectorised numpy (the kernel tests' oracle and
+the baseline of bench/kernel_throughput.py).
 
 Mandel vectors, one row per point. E is the elasticity matrix, Y the quadratic form of the yield
 set K = {τ : τ·Yτ ≤ σ_Y²}; the two commute (isotropic E, von Mises-type Y), so one orthonormal
