@@ -89,7 +89,7 @@ def test_bdf2_is_second_order_in_plane_strain(formulation, degree):
     2.65 and 2.06; implicit Euler 0.99 and 0.90). BDF2's history w = σ − E ε then holds σ33,
     whose (E ε)33 = λ tr ε: built from the in-plane state alone it was the wrong shape, and
     every plane-strain scene with ``scheme = "bdf2"`` failed at its second step."""
-    from test_mixed import _cube, _pushed, stress_at_points
+    from tests.model.test_mixed import _cube, _pushed, stress_at_points
     from vpcontact.model import Elasticity, Perzyna, PlaneStrain
     from vpcontact.solver import QuasistaticProblem
 

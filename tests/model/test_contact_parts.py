@@ -14,38 +14,8 @@ from mpi4py import MPI
 from vpcontact import cli
 
 from tests.support.mpi_launch import write_shared
+from tests.support.scenes import scene_text
 
-HEADER = """\
-name = "{name}"
-
-[mesh]
-type = "rectangle"
-cell_type = "quadrilateral"
-lower = [-1.0, {bottom}]
-upper = [1.0, 0.5]
-cells = [16, {rows}]
-
-[boundary.left]
-kind = "clamped"
-plane = {{ axis = "x", value = -1.0 }}
-
-[boundary.top]
-kind = "contact"
-plane = {{ axis = "y", value = 0.5 }}
-
-[material]
-E = 1000.0
-nu = 0.3
-plane = "strain"
-
-[time]
-T = 1.0
-k = 0.25
-
-[output]
-xdmf = false
-figures = false
-"""
 
 TOP = """
 [[contact]]
@@ -91,8 +61,8 @@ def test_two_indenters_squeeze_a_block_as_its_symmetric_half_says(shared_tmp_pat
     mirror images of each other: the contact force of each equals the one indenter's on the
     half block with a symmetry plane (the same discrete problem), the two are opposite, and
     every force balances."""
-    full = HEADER.format(name="full", bottom=-0.5, rows=8) + TOP + BOTTOM
-    half = HEADER.format(name="half", bottom=0.0, rows=4) + HALF + TOP
+    full = scene_text("clamped_quad_block", name="full", bottom=-0.5, rows=8) + TOP + BOTTOM
+    half = scene_text("clamped_quad_block", name="half", bottom=0.0, rows=4) + HALF + TOP
     (code_full, out_full), (code_half, out_half) = (_run(shared_tmp_path, "full", full),
                                                     _run(shared_tmp_path, "half", half))
     assert code_full == 0 and code_half == 0
@@ -144,7 +114,7 @@ boundary = "bottom"
 mu = 1e-3
 gap = 0.0
 """
-    text = HEADER.format(name="rest", bottom=-0.5, rows=8) + TOP + foundation
+    text = scene_text("clamped_quad_block", name="rest", bottom=-0.5, rows=8) + TOP + foundation
     code, out = _run(shared_tmp_path, "rest", text)
     assert code == 0
     header, rows = _csv(out / "reactions.csv")
@@ -166,7 +136,7 @@ gap = 0.0
 def test_two_obstacles_at_a_corner_node_the_first_part_owns_it(shared_tmp_path):
     """Contact on the top and on the right end of a block, each against its own plane: the
     corner node is in the first listed part only (one constraint, one output row)."""
-    text = HEADER.format(name="corner", bottom=-0.5, rows=8) + """
+    text = scene_text("clamped_quad_block", name="corner", bottom=-0.5, rows=8) + """
 [boundary.right]
 kind = "contact"
 plane = { axis = "x", value = 1.0 }
@@ -206,7 +176,7 @@ obstacle = { shape = "plane", point = [1.0, 0], normal = [-1, 0] }
      r"contact\[1\]\.boundary", "boundary part 'left' has kind 'clamped', not 'contact'"),
 ])
 def test_contact_array_errors_are_located(shared_tmp_path, capsys, edit, key, message):
-    text = edit(HEADER.format(name="bad", bottom=-0.5, rows=8) + TOP)
+    text = edit(scene_text("clamped_quad_block", name="bad", bottom=-0.5, rows=8) + TOP)
     scene = write_shared(shared_tmp_path / "bad.toml", text)
     out = shared_tmp_path / "bad"
     assert cli.main(["validate", str(scene)]) == 2
@@ -222,7 +192,7 @@ def test_an_obstacle_of_the_second_part_that_faces_away_is_located_at_its_table(
         shared_tmp_path, capsys):
     """A mesh-level refusal of the second contact part (its plane's normal points away from
     the body) names that part's table, contact[1]."""
-    text = HEADER.format(name="away", bottom=-0.5, rows=8) + TOP + """
+    text = scene_text("clamped_quad_block", name="away", bottom=-0.5, rows=8) + TOP + """
 [boundary.bottom]
 kind = "contact"
 plane = { axis = "y", value = -0.5 }
@@ -242,7 +212,7 @@ obstacle = { shape = "plane", point = [0, -0.6], normal = [0, -1] }
 def test_show_writes_the_array_back(shared_tmp_path, capsys):
     """``show`` writes [[contact]] tables back, and reading them gives the same scene."""
     from vpcontact.scene import loads_text
-    text = HEADER.format(name="full", bottom=-0.5, rows=8) + TOP + BOTTOM
+    text = scene_text("clamped_quad_block", name="full", bottom=-0.5, rows=8) + TOP + BOTTOM
     scene = loads_text(text)
     again = loads_text(scene.to_toml())
     assert again == scene and len(again.contacts) == 2 and again.contact_array

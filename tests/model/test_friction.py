@@ -28,63 +28,28 @@ from vpcontact.solver import (Dirichlet, Loads, QuasistaticProblem, StepControl,
                               tag_facets)
 
 from tests.support.mpi_launch import write_shared
-
-DRAGGED = """\
-name = "dragged"
-
-[mesh]
-type = "rectangle"
-lower = [0.0, 0.0]
-upper = [1.0, 0.25]
-cells = [16, 4]
-
-[boundary.top]
-kind = "displacement"
-plane = { axis = "y", value = 0.25 }
-displacement = ["0.02*max(t - 0.5, 0)", "-0.002*min(t/0.5, 1)"]
-
-[boundary.bottom]
-kind = "contact"
-plane = { axis = "y", value = 0.0 }
-
-[material]
-E = 1000.0
-nu = 0.3
-plane = "strain"
-
-[contact]
-type = "normal_compliance"
-boundary = "bottom"
-mu = 1e-3
-FRICTION
-
-[time]
-T = 1.0
-k = 0.1
-
-[output]
-xdmf = false
-figures = false
-"""
+from tests.support.scenes import scene_text
 
 
-#: The foundation of DRAGGED as a rigid plane (a Signorini part's obstacle).
+#: The foundation of the dragged block (tests/scenes/dragged.toml) as a rigid plane (a Signorini
+#: part's obstacle).
 PLANE_FLOOR = 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n'
 
 
 def _signorini_dragged(obstacle: str) -> str:
-    """DRAGGED with a rigid obstacle (the ``obstacle`` lines, with any motion or force) in place
-    of the compliant foundation, and Coulomb friction 𝔣 = 0.3."""
-    return DRAGGED.replace('type = "normal_compliance"', 'type = "signorini"').replace(
-        "mu = 1e-3\n", obstacle).replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    """The dragged block with a rigid obstacle (the ``obstacle`` lines, with any motion or force)
+    in place of the compliant foundation, and Coulomb friction 𝔣 = 0.3."""
+    text = scene_text("dragged", friction='friction = { type = "coulomb", coefficient = 0.3 }')
+    return text.replace('type = "normal_compliance"', 'type = "signorini"').replace(
+        "mu = 1e-3\n", obstacle)
 
 
 def _dragged_on(floor: str) -> str:
-    """DRAGGED with Coulomb friction 𝔣 = 0.3 on a ``"rigid"`` floor (a Signorini plane) or on
-    its compliant one."""
+    """The dragged block with Coulomb friction 𝔣 = 0.3 on a ``"rigid"`` floor (a Signorini plane)
+    or on its compliant one."""
     if floor == "rigid":
         return _signorini_dragged(PLANE_FLOOR)
-    return DRAGGED.replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    return scene_text("dragged", friction='friction = { type = "coulomb", coefficient = 0.3 }')
 
 
 def _forces(out):
@@ -95,7 +60,7 @@ def _forces(out):
 
 
 def _run(tmp, name, friction):
-    scene = write_shared(tmp / f"{name}.toml", DRAGGED.replace("FRICTION", friction))
+    scene = write_shared(tmp / f"{name}.toml", scene_text("dragged", friction=friction))
     out = tmp / name
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     return _forces(out)
@@ -130,63 +95,14 @@ def test_a_rigid_floor_given_by_its_gap_carries_friction(shared_tmp_path):
         assert np.allclose(gap[key], plane[key], rtol=1e-10, atol=1e-12), key
 
 
-HELD_ON_A_COMPLIANT_FACE = """name = "held"
-[mesh]
-type = "rectangle"
-lower = [-1.0, 0.0]
-upper = [1.0, 1.0]
-cells = [16, 8]
-[boundary.left]
-kind = "clamped"
-plane = { axis = "x", value = -1.0 }
-[boundary.bottom]
-kind = "symmetry"
-plane = { axis = "y", value = 0.0 }
-[boundary.top]
-kind = "contact"
-box = { lower = [-1.0, 1.0], upper = [0.875, 1.0] }
-[boundary.right]
-kind = "contact"
-plane = { axis = "x", value = 1.0 }
-[boundary.free]
-kind = "traction"
-box = { lower = [0.875, 1.0], upper = [1.0, 1.0] }
-traction = [0.0, 0.0]
-[material]
-E = 1000.0
-nu = 0.3
-plane = "strain"
-[law]
-type = "elastic"
-[loads]
-body_force = ["100*t", 0.0]
-[[contact]]
-type = "signorini"
-boundary = "top"
-obstacle = { shape = "plane", point = [0.0, 1.01], normal = [0.0, -1.0] }
-motion = [0.0, "-0.03*t"]
-[[contact]]
-type = "normal_compliance"
-boundary = "right"
-mu = 0.001
-gap = 0.0
-friction = { type = "coulomb", coefficient = 0.3 }
-[time]
-T = 1.0
-k = 0.25
-[output]
-figures = false
-xdmf = false
-"""
-
-
-def test_reactions_and_contact_forces_balance_with_friction_on_a_held_node(shared_tmp_path):
+def test_reactions_and_contact_forces_balance_with_friction_on_a_held_node(scene_text,
+                                                                          shared_tmp_path):
     """A block pushed by its weight sideways onto a compliant wall with Coulomb friction,
     pressed from above by a rigid plane; the wall's bottom node sits on a symmetry plane. The
     supports' and the parts' forces balance the load in every step. The wall's force was its
     friction term assembled after the step, which sees the committed slip history instead of
     the step's: 0.29 N (1 %) out of balance in y."""
-    scene = write_shared(shared_tmp_path / "held.toml", HELD_ON_A_COMPLIANT_FACE)
+    scene = write_shared(shared_tmp_path / "held.toml", scene_text("held_on_a_compliant_face"))
     out = shared_tmp_path / "held"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     f = _forces(out)
@@ -282,7 +198,7 @@ def test_a_block_pushed_up_an_inclined_foundation():
     ('friction = { type = "viscous" }', r"contact\.friction\.type", ""),
 ])
 def test_friction_errors_are_located(shared_tmp_path, capsys, friction, key, message):
-    scene = write_shared(shared_tmp_path / "bad.toml", DRAGGED.replace("FRICTION", friction))
+    scene = write_shared(shared_tmp_path / "bad.toml", scene_text("dragged", friction=friction))
     assert cli.main(["validate", str(scene)]) == 2
     err = capsys.readouterr().err
     if MPI.COMM_WORLD.rank == 0:
@@ -800,15 +716,15 @@ def test_show_writes_friction_back():
     from vpcontact.scene import loads_text
     for friction in ('friction = { type = "coulomb", coefficient = 0.3 }',
                      'friction = { type = "tresca", threshold = "1 + x[0]" }'):
-        scene = loads_text(DRAGGED.replace("FRICTION", friction))
+        scene = loads_text(scene_text("dragged", friction=friction))
         assert loads_text(scene.to_toml()) == scene and scene.contact.friction is not None
 
 
 def test_contact_csv_holds_the_friction_state(shared_tmp_path):
     """With friction contact.csv adds |t|, the step's slip, the accumulated slip and whether the
     node slipped: sliding, every node of the bottom slips with |t| = 𝔣 p, and the slips add up."""
-    scene = write_shared(shared_tmp_path / "csv.toml", DRAGGED.replace(
-        "FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }'))
+    scene = write_shared(shared_tmp_path / "csv.toml", scene_text(
+        "dragged", friction='friction = { type = "coulomb", coefficient = 0.3 }'))
     out = shared_tmp_path / "csv"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     lines = (out / "contact.csv").read_text().splitlines()

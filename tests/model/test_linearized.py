@@ -20,6 +20,7 @@ from vpcontact.scene import build, loads_text
 from vpcontact.solver import StepControl, advance
 from tests.support import flowing_beam
 from tests.support.mpi_launch import write_shared
+from tests.support.scenes import scene_text
 
 E, NU, SY, MU = 100.0, 0.3, 1.0, 1.0
 
@@ -154,60 +155,11 @@ def test_law_properties():
         Perzyna(Elasticity("3d", 1e8, 0.3), 1.0, 200.0, scheme="rosenbrock")
 
 
-PLATE = """\
-name = "plate"
-
-[mesh]
-type = "rectangle"
-lower = [0.0, 0.0]
-upper = [2.0, 1.0]
-cells = [16, 8]
-
-[boundary.left]
-kind = "clamped"
-plane = { axis = "x", value = 0.0 }
-
-[boundary.right]
-kind = "traction"
-plane = { axis = "x", value = 2.0 }
-traction = [0.0, "-10*t"]
-
-[boundary.bottom]
-kind = "contact"
-plane = { axis = "y", value = 0.0 }
-
-[material]
-E = 1e8
-nu = 0.3
-plane = "strain"
-
-[law]
-type = "perzyna"
-sigma_y = "sqrt(10)"
-mu_star = 200.0
-scheme = "linearized"
-
-[contact]
-type = "signorini"
-boundary = "bottom"
-gap = 0.0
-
-[time]
-T = 0.2
-k = 0.02
-TIME
-
-[output]
-xdmf = false
-figures = false
-"""
-
-
 def test_a_scene_runs_with_the_linearized_scheme_and_show_writes_it_back(shared_tmp_path):
-    scene = loads_text(PLATE.replace("TIME", ""))
+    scene = loads_text(scene_text("plate", time=""))
     assert scene.law.scheme == "linearized"
     assert loads_text(scene.to_toml()) == scene
-    path = write_shared(shared_tmp_path / "plate.toml", PLATE.replace("TIME", ""))
+    path = write_shared(shared_tmp_path / "plate.toml", scene_text("plate", time=""))
     out = shared_tmp_path / "plate"
     assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())
@@ -239,7 +191,7 @@ def test_a_large_linearized_step_is_one_newton_iteration():
 
 
 def test_bdf2_refuses_the_linearized_scheme(shared_tmp_path, capsys):
-    path = write_shared(shared_tmp_path / "bdf.toml", PLATE.replace("TIME", 'scheme = "bdf2"'))
+    path = write_shared(shared_tmp_path / "bdf.toml", scene_text("plate", time='scheme = "bdf2"'))
     assert cli.main(["run", str(path), "--out", str(shared_tmp_path / "bdf"), "--quiet"]) == 2
     err = capsys.readouterr().err
     if MPI.COMM_WORLD.rank == 0:
@@ -248,9 +200,9 @@ def test_bdf2_refuses_the_linearized_scheme(shared_tmp_path, capsys):
 
 
 def _plate_problem(scheme, T):
-    """The problem of PLATE (plane strain, mixed formulation, pressed onto a rigid floor while
-    it flows) with the given law scheme and final time."""
-    text = PLATE.replace("TIME", "").replace('scheme = "linearized"', f'scheme = "{scheme}"')
+    """The problem of the plate (tests/scenes/plate.toml: plane strain, mixed formulation,
+    pressed onto a rigid floor while it flows) with the given law scheme and final time."""
+    text = scene_text("plate", time="").replace('scheme = "linearized"', f'scheme = "{scheme}"')
     return build(loads_text(text.replace("T = 0.2", f"T = {T}"))).problem
 
 

@@ -45,77 +45,10 @@ def test_q1_stiffness_has_only_the_rigid_modes(cell, rigid):
     assert _zero_modes(msh, 1) > rigid  # one point per cell: hourglass modes (the test bites)
 
 
-POINT_LOAD = """\
-name = "point_load"
-
-[mesh]
-type = "box"
-lower = [0.0, 0.0, 0.0]
-upper = [1.0, 1.0, 1.0]
-cells = [4, 4, 4]
-cell_type = "hexahedron"
-
-[boundary.bottom]
-kind = "clamped"
-plane = { axis = "z", value = 0.0 }
-
-[[loads.point]]
-at = [0.5, 0.5, 1.0]
-force = [0.0, 0.0, "-1.0*t"]
-
-[material]
-E = 1000.0
-nu = 0.3
-
-[time]
-T = 1.0
-k = 1.0
-
-[output]
-figures = false
-"""
-
-PUNCH = """\
-name = "punch"
-
-[mesh]
-type = "box"
-lower = [-0.5, -0.5, -1.0]
-upper = [0.5, 0.5, 0.0]
-cells = [8, 8, 4]
-cell_type = "hexahedron"
-
-[boundary.bottom]
-kind = "clamped"
-plane = { axis = "z", value = -1.0 }
-
-[boundary.top]
-kind = "contact"
-where = "x[2] > -1e-9 and abs(x[0]) < 0.2 and abs(x[1]) < 0.13"
-
-[material]
-E = 1000.0
-nu = 0.3
-
-[contact]
-type = "signorini"
-boundary = "top"
-obstacle = { shape = "ellipsoid", center = [0.0, 0.0, 0.25], semi_axes = [0.3, 0.2, 0.22] }
-motion = [0, 0, "-0.04*min(t/0.5, 1)"]
-
-[time]
-T = 1.0
-k = 0.25
-
-[output]
-figures = false
-"""
-
-
-def test_point_load_on_hexahedra_is_carried(shared_tmp_path):
+def test_point_load_on_hexahedra_is_carried(scene_text, shared_tmp_path):
     """Under one point load, one-point integration left hourglass modes that Newton could not
     resolve (50 iterations, no convergence); an elastic step is one Newton iteration."""
-    scene = write_shared(shared_tmp_path / "point_load.toml", POINT_LOAD)
+    scene = write_shared(shared_tmp_path / "point_load.toml", scene_text("point_load"))
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())
@@ -123,11 +56,11 @@ def test_point_load_on_hexahedra_is_carried(shared_tmp_path):
     assert summary["reactions"]["final"]["bottom"][2] == pytest.approx(1.0, rel=1e-9)
 
 
-def test_indenter_on_hexahedra_is_felt(shared_tmp_path):
+def test_indenter_on_hexahedra_is_felt(scene_text, shared_tmp_path):
     """An ellipsoid pushed 0.01 into a hexahedral block: contact forms, u_ν = g wherever the
     pressure is compressive, and the contact force is balanced by the support. (With one point
     per cell the face's nodes went up and down in a checkerboard and the force stayed zero.)"""
-    scene = write_shared(shared_tmp_path / "punch.toml", PUNCH)
+    scene = write_shared(shared_tmp_path / "punch.toml", scene_text("punch"))
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())

@@ -15,6 +15,7 @@ from vpcontact.paper import signorini as paper
 from vpcontact.output import runner
 
 from tests.support.mpi_launch import clean_environment
+from tests.support.scenes import scene_text
 
 pytestmark = [pytest.mark.serial, pytest.mark.mpi]
 
@@ -99,11 +100,9 @@ def test_two_rank_partitions_repeat(tmp_path):
 
 
 def _friction_scene(tmp_path, law: str):
-    """The pressed and dragged block of tests/model/test_friction.py with Coulomb friction on a rigid
-    floor (Signorini: nodal friction) or a compliant one."""
-    from test_friction import DRAGGED
-
-    text = DRAGGED.replace("FRICTION", 'friction = { type = "coulomb", coefficient = 0.3 }')
+    """The pressed and dragged block of tests/model/test_friction.py (tests/scenes/dragged.toml)
+    with Coulomb friction on a rigid floor (Signorini: nodal friction) or a compliant one."""
+    text = scene_text("dragged", friction='friction = { type = "coulomb", coefficient = 0.3 }')
     if law == "signorini":
         text = text.replace('type = "normal_compliance"', 'type = "signorini"').replace(
             "mu = 1e-3\n", 'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n')

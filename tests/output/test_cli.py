@@ -393,52 +393,14 @@ def test_an_initial_stress_infinite_at_one_process_s_points_is_refused_on_every_
             capsys.readouterr().err
 
 
-_STIFF_LINEARIZED = """name = "block"
-[mesh]
-type = "rectangle"
-lower = [0.0, 0.0]
-upper = [1.0, 0.5]
-cells = [4, 2]
-[boundary.left]
-kind = "symmetry"
-plane = { axis = "x", value = 0.0 }
-[boundary.top]
-kind = "displacement"
-plane = { axis = "y", value = 0.5 }
-displacement = ["free", "-0.01*t"]
-[boundary.bottom]
-kind = "contact"
-plane = { axis = "y", value = 0.0 }
-[material]
-E = 1000.0
-nu = 0.3
-plane = "strain"
-[law]
-type = "perzyna"
-sigma_y = 5.0
-mu_star = MU
-scheme = "linearized"
-[contact]
-type = "signorini"
-boundary = "bottom"
-gap = 0.0
-[time]
-T = 1.0
-k = 0.25
-[output]
-figures = false
-xdmf = false
-"""
-
-
 @pytest.mark.parametrize("mu_star, warned", [(1e-6, True), (1e-2, False)])
-def test_the_linearized_step_far_into_its_stiff_range_is_warned(shared_tmp_path, mu_star,
-                                                                warned):
+def test_the_linearized_step_far_into_its_stiff_range_is_warned(shared_tmp_path, scene_text,
+                                                                mu_star, warned):
     """k E/μ* = 2.5e8: the linearized step's tangent along the flow is nearly singular, and a
     sweep's plane-strain block came out with displacements 60 times the exact ones, exit 0,
     without a word. The run now says so (2.5e4: no warning)."""
     path = write_shared(shared_tmp_path / f"stiff_{mu_star:g}.toml",
-                        _STIFF_LINEARIZED.replace("MU", repr(mu_star)))
+                        scene_text("stiff_linearized", mu_star=repr(mu_star)))
     out = shared_tmp_path / f"stiff_{mu_star:g}"
     assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
     found = [w for w in _summary(out)["warnings"] if "linearized step" in w]

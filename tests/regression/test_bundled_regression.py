@@ -11,8 +11,8 @@ their ``summary.json`` with the values stored in ``tests/reference/bundled_summa
   force of the scene (a reordered sum changes the last digits, nothing more);
 - the active contact nodes per step: exactly.
 
-Record again (``python3 tests/regression/test_bundled_regression.py``) only where an answer is meant to
-change, and say so in the commit.
+Record again (``python3 tests/regression/test_bundled_regression.py [scene ...]``) only where an
+answer is meant to change, and say so in the commit.
 """
 
 from __future__ import annotations

@@ -11,6 +11,7 @@ from mpi4py import MPI
 from vpcontact import cli
 from vpcontact import scene as scenes
 from vpcontact.scene import build
+from tests.support.scenes import scene_text
 
 LEFT, RIGHT, BOTTOM, BODY = 1, 2, 3, 10
 
@@ -45,45 +46,10 @@ def _rectangle_msh(path, order: int = 1, quads_too: bool = False):
     MPI.COMM_WORLD.barrier()
 
 
-SCENE = """\
-name = "gmsh_block"
-[mesh]
-type = "gmsh"
-file = "block.msh"
-dim = 2
-
-[boundary.clamp]
-kind = "clamped"
-tag = 1
-
-[boundary.end]
-kind = "traction"
-tag = 2
-traction = [0.0, "-1e3*t"]
-
-[boundary.floor]
-kind = "contact"
-tag = {floor_tag}
-
-[material]
-E = 1e8
-nu = 0.3
-
-[contact]
-type = "normal_compliance"
-boundary = "floor"
-mu = 1e-7
-
-[time]
-T = 1.0
-k = 0.25
-"""
-
-
 def _write(folder, floor_tag):
     path = folder / "block.toml"
     if MPI.COMM_WORLD.rank == 0:
-        path.write_text(SCENE.format(floor_tag=floor_tag))
+        path.write_text(scene_text("gmsh_block", floor_tag=floor_tag))
     MPI.COMM_WORLD.barrier()
     return path
 
@@ -113,7 +79,7 @@ def test_friction_on_a_second_order_gmsh_mesh(shared_tmp_path, contact):
     from vpcontact.model.nodal_areas import facet_size
 
     _rectangle_msh(shared_tmp_path / "block.msh", order=2)
-    text = SCENE.format(floor_tag=BOTTOM).replace("mu = 1e-7\n", (
+    text = scene_text("gmsh_block", floor_tag=BOTTOM).replace("mu = 1e-7\n", (
         'mu = 1e-7\nfriction = { type = "coulomb", coefficient = 0.3 }\n'
         if contact == "normal_compliance" else
         'friction = { type = "coulomb", coefficient = 0.3 }\n'

@@ -15,69 +15,13 @@ import pytest
 from vpcontact import scene as sc
 from vpcontact.scene import DEFAULT_SCENE, SceneError, bundled, load, loads_text, resolve
 
-BASE = """\
-name = "base"
+from tests.support.scenes import scene_text
 
-[mesh]
-type = "rectangle"
-cells = [4, 4]
+BASE = scene_text("base")
 
-[boundary.top]
-kind = "clamped"
-plane = { axis = "y", value = 1.0 }
+NO_CONTACT = scene_text("no_contact")
 
-[boundary.bottom]
-kind = "contact"
-plane = { axis = "y", value = 0.0 }
-
-[material]
-E = 1e8
-nu = 0.3
-
-[contact]
-type = "normal_compliance"
-boundary = "bottom"
-mu = 100.0
-
-[time]
-T = 1.0
-k = 0.1
-"""
-
-NO_CONTACT = """\
-[mesh]
-type = "rectangle"
-cells = [2, 2]
-
-[boundary.top]
-kind = "clamped"
-plane = { axis = "y", value = 1.0 }
-
-[material]
-E = 1.0
-nu = 0.3
-
-[time]
-T = 1.0
-k = 0.5
-"""
-
-BAR = """\
-[mesh]
-type = "interval"
-cells = [10]
-
-[boundary.left]
-kind = "clamped"
-plane = { axis = "x", value = 0.0 }
-
-[material]
-E = 10.0
-
-[time]
-T = 1.0
-k = 0.1
-"""
+BAR = scene_text("bar")
 
 
 def edit(text: str, old: str, new: str) -> str:

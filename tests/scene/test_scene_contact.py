@@ -14,70 +14,11 @@ from mpi4py import MPI
 from vpcontact import cli
 
 from tests.support.mpi_launch import write_shared
+from tests.support.scenes import scene_text
 
-COMPRESSION = """\
-name = "compression"
+COMPRESSION = scene_text("compression")
 
-[mesh]
-type = "rectangle"
-lower = [0.0, 0.0]
-upper = [2.0, 1.0]
-cells = [8, 4]
-
-[boundary.bottom]
-kind = "symmetry"
-plane = { axis = "y", value = 0.0 }
-
-[boundary.left]
-kind = "symmetry"
-plane = { axis = "x", value = 0.0 }
-
-[boundary.top]
-kind = "displacement"
-plane = { axis = "y", value = 1.0 }
-displacement = ["free", "-0.01*t"]
-
-[material]
-E = 100.0
-nu = 0.3
-
-[time]
-T = 1.0
-k = 0.5
-"""
-
-INDENTATION = """\
-name = "indentation"
-
-[mesh]
-type = "rectangle"
-lower = [-1.0, -1.0]
-upper = [1.0, 0.0]
-cells = [32, 16]
-
-[boundary.bottom]
-kind = "clamped"
-plane = { axis = "y", value = -1.0 }
-
-[boundary.top]
-kind = "contact"
-box = { lower = [-0.4, 0.0], upper = [0.4, 0.0] }
-
-[material]
-E = 1000.0
-nu = 0.3
-plane = "strain"
-
-[contact]
-type = "signorini"
-boundary = "top"
-obstacle = { shape = "cylinder", center = [0.0, 0.5], radius = 0.5 }
-motion = [0, "-0.02*t"]
-
-[time]
-T = 1.0
-k = 0.25
-"""
+INDENTATION = scene_text("indentation")
 
 
 def _csv(path: Path):
@@ -302,45 +243,6 @@ def test_show_writes_a_rotation_back(shared_tmp_path, capsys):
     assert cli.main(["validate", str(again)]) == 0
 
 
-CYLINDER = """\
-name = "cylinder"
-
-[mesh]
-type = "gmsh"
-file = "cylinder.msh"
-dim = 2
-
-[boundary.contact]
-kind = "contact"
-tag = 1
-
-[boundary.top]
-kind = "displacement"
-tag = 2
-displacement = ["free", "-0.005*t"]
-
-[boundary.axis]
-kind = "symmetry"
-tag = 3
-
-[boundary.rest]
-kind = "traction"
-tag = 5
-
-[material]
-E = 1.0
-nu = 0.3
-plane = "strain"
-
-[contact]
-CONTACT
-
-[time]
-T = 1.0
-k = 1.0
-"""
-
-
 def test_curved_face_on_a_foundation_surface_from_a_scene(shared_tmp_path):
     """Normal compliance on a curved Γ3 (a Gmsh cylinder) against a foundation surface given as
     an obstacle: a stiff foundation carries the Signorini force, and contact.csv holds
@@ -353,7 +255,8 @@ def test_curved_face_on_a_foundation_surface_from_a_scene(shared_tmp_path):
                           'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }'),
             ("normal_compliance", 'type = "normal_compliance"\nboundary = "contact"\nmu = 1e-4\n'
                                   'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }')):
-        scene = write_shared(shared_tmp_path / f"{kind}.toml", CYLINDER.replace("CONTACT", contact))
+        scene = write_shared(shared_tmp_path / f"{kind}.toml",
+                             scene_text("cylinder_contact", contact=contact))
         out = shared_tmp_path / kind
         assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
         header, rows = _csv(out / "reactions.csv")
@@ -380,7 +283,7 @@ def test_p2_normal_compliance_on_a_curved_face_validates_as_it_runs(shared_tmp_p
     contact = ('type = "normal_compliance"\nboundary = "contact"\nmu = 1e-4\n'
                'obstacle = { shape = "plane", point = [0, 0], normal = [0, 1] }\n\n'
                '[discretization]\ndegree = 2')
-    text = CYLINDER.replace("CONTACT", contact)
+    text = scene_text("cylinder_contact", contact=contact)
     scene = write_shared(shared_tmp_path / "p2.toml", text)
     for command in (["validate", str(scene)],
                     ["run", str(scene), "--out", str(shared_tmp_path / "out"), "--quiet"]):

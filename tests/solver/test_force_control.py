@@ -165,46 +165,8 @@ def test_indentation_creep_of_a_perzyna_block():
     assert creep[-1] < 0.5 * creep[0], creep  # more and more slowly
 
 
-SCENE = """\
-name = "pressed"
-
-[mesh]
-type = "rectangle"
-lower = [-1.0, -0.5]
-upper = [1.0, 0.5]
-cells = [16, 8]
-
-[boundary.left]
-kind = "clamped"
-plane = { axis = "x", value = -1.0 }
-
-[boundary.top]
-kind = "contact"
-plane = { axis = "y", value = 0.5 }
-
-[material]
-E = 1000.0
-nu = 0.3
-plane = "strain"
-
-[contact]
-type = "signorini"
-boundary = "top"
-obstacle = { shape = "cylinder", center = [0.3, 2.5], radius = 2.0 }
-force = [0, "-10*t"]
-
-[time]
-T = 1.0
-k = 0.25
-
-[output]
-xdmf = false
-figures = false
-"""
-
-
-def test_a_force_driven_indenter_from_a_scene(shared_tmp_path):
-    scene = write_shared(shared_tmp_path / "pressed.toml", SCENE)
+def test_a_force_driven_indenter_from_a_scene(scene_text, shared_tmp_path):
+    scene = write_shared(shared_tmp_path / "pressed.toml", scene_text("pressed_by_force"))
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     text = (out / "reactions.csv").read_text().splitlines()
@@ -232,8 +194,8 @@ def test_a_force_driven_indenter_from_a_scene(shared_tmp_path):
     (lambda s: s.replace('type = "signorini"', 'type = "normal_compliance"\nmu = 1.0'),
      r"contact\.force", "a foundation surface stays where it is"),
 ])
-def test_force_control_errors_are_located(shared_tmp_path, capsys, edit, key, message):
-    scene = write_shared(shared_tmp_path / "bad.toml", edit(SCENE))
+def test_force_control_errors_are_located(scene_text, shared_tmp_path, capsys, edit, key, message):
+    scene = write_shared(shared_tmp_path / "bad.toml", edit(scene_text("pressed_by_force")))
     out = shared_tmp_path / "bad"
     assert cli.main(["validate", str(scene)]) == 2
     err = capsys.readouterr().err
@@ -243,8 +205,8 @@ def test_force_control_errors_are_located(shared_tmp_path, capsys, edit, key, me
     assert not out.exists()
 
 
-def test_show_writes_the_force_back(shared_tmp_path):
+def test_show_writes_the_force_back(scene_text, shared_tmp_path):
     from vpcontact.scene import loads_text
-    scene = loads_text(SCENE)
+    scene = loads_text(scene_text("pressed_by_force"))
     again = loads_text(scene.to_toml())
     assert again == scene and again.contact.force is not None

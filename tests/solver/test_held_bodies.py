@@ -15,43 +15,6 @@ from vpcontact import cli
 
 from tests.support.mpi_launch import write_shared
 
-ON_FLOOR = """\
-name = "on_floor"
-
-[mesh]
-type = "rectangle"
-lower = [0.0, 0.0]
-upper = [1.0, 0.5]
-cells = [8, 4]
-
-[boundary.floor]
-kind = "contact"
-plane = { axis = "y", value = 0.0 }
-
-[boundary.top]
-kind = "traction"
-plane = { axis = "y", value = 0.5 }
-traction = [0, "-5*t"]
-
-[material]
-E = 1000.0
-nu = 0.3
-plane = "strain"
-
-[contact]
-type = "signorini"
-boundary = "floor"
-gap = 0.0
-
-[time]
-T = 1.0
-k = 0.5
-
-[output]
-xdmf = false
-figures = false
-"""
-
 
 def _rows(path):
     lines = path.read_text().splitlines()
@@ -60,11 +23,11 @@ def _rows(path):
             for i, name in enumerate(header)}
 
 
-def test_a_block_pressed_onto_a_floor_is_held_by_it(shared_tmp_path):
+def test_a_block_pressed_onto_a_floor_is_held_by_it(scene_text, shared_tmp_path):
     """No Dirichlet part: the floor holds the block vertically, nothing horizontally (the
     loads do not push it that way). The floor carries the whole load, the stabilising spring
     a negligible share, reported in summary.json."""
-    scene = write_shared(shared_tmp_path / "on_floor.toml", ON_FLOOR)
+    scene = write_shared(shared_tmp_path / "on_floor.toml", scene_text("block_on_floor"))
     assert cli.main(["validate", str(scene)]) == 0
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
@@ -79,9 +42,9 @@ def test_a_block_pressed_onto_a_floor_is_held_by_it(shared_tmp_path):
     assert held["largest_share_of_applied"] < 1e-6, held
 
 
-def test_a_block_pushed_along_the_floor_is_refused_by_validate(shared_tmp_path, capsys):
-    text = ON_FLOOR + '\n[boundary.right]\nkind = "traction"\nplane = { axis = "x", value = 1.0 }' \
-                      '\ntraction = ["t", 0]\n'
+def test_a_block_pushed_along_the_floor_is_refused_by_validate(scene_text, shared_tmp_path, capsys):
+    text = scene_text("block_on_floor") + '\n[boundary.right]\nkind = "traction"' \
+                                          '\nplane = { axis = "x", value = 1.0 }\ntraction = ["t", 0]\n'
     scene = write_shared(shared_tmp_path / "pushed.toml", text)
     assert cli.main(["validate", str(scene)]) == 2
     err = capsys.readouterr().err
@@ -90,8 +53,9 @@ def test_a_block_pushed_along_the_floor_is_refused_by_validate(shared_tmp_path, 
                          r"translation along x", err), err
 
 
-def test_a_block_pulled_off_the_floor_stops_with_no_equilibrium(shared_tmp_path, capsys):
-    text = ON_FLOOR.replace('traction = [0, "-5*t"]', 'traction = [0, "5*t"]')
+def test_a_block_pulled_off_the_floor_stops_with_no_equilibrium(scene_text, shared_tmp_path,
+                                                                capsys):
+    text = scene_text("block_on_floor").replace('traction = [0, "-5*t"]', 'traction = [0, "5*t"]')
     scene = write_shared(shared_tmp_path / "pulled.toml", text)
     out = shared_tmp_path / "pulled"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) != 0

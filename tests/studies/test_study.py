@@ -132,7 +132,7 @@ def test_bad_study_requests_are_clear_errors(tmp_path, capsys, args, message):
 
 
 def test_gmsh_scene_cannot_be_refined(tmp_path, capsys):
-    from test_gmsh_scene import BOTTOM, _rectangle_msh, _write
+    from tests.scene.test_gmsh_scene import BOTTOM, _rectangle_msh, _write
     _rectangle_msh(tmp_path / "block.msh")
     assert _study(tmp_path, "convergence", str(_write(tmp_path, BOTTOM))) == 2
     if ROOT0:
