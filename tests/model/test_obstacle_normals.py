@@ -20,50 +20,22 @@ from mpi4py import MPI
 
 from vpcontact import cli
 from tests.support.mpi_launch import write_shared
+from tests.support.scenes import scene_text
 
 ALPHA = np.deg2rad(2.0)
 
-INCLINED = f"""\
-name = "inclined"
+#: The plane's normal, at ALPHA from the block's top face.
+NORMAL = f"[{np.sin(ALPHA)!r}, {-np.cos(ALPHA)!r}]"
 
-[mesh]
-type = "rectangle"
-lower = [0.0, 0.0]
-upper = [1.0, 0.25]
-cells = [32, 8]
 
-[boundary.bottom]
-kind = "clamped"
-plane = {{ axis = "y", value = 0.0 }}
-
-[boundary.top]
-kind = "contact"
-plane = {{ axis = "y", value = 0.25 }}
-
-[material]
-E = 1000.0
-nu = 0.3
-plane = "strain"
-
-[contact]
-type = "signorini"
-boundary = "top"
-obstacle = {{ shape = "plane", point = [0.0, 0.25], normal = [{np.sin(ALPHA)!r}, {-np.cos(ALPHA)!r}] }}
-motion = ["0", "-0.01*t"]
-NORMALS
-
-[time]
-T = 1.0
-k = 0.25
-
-[output]
-xdmf = false
-figures = false
-"""
+def _inclined(normals: str) -> str:
+    """The block pressed against the inclined plane (tests/scenes/inclined.toml), with the
+    ``normals`` line (``""`` for none) in its ``[contact]`` table."""
+    return scene_text("inclined", normal=NORMAL, normals=normals)
 
 
 def _run(tmp, name, normals, discretization=""):
-    text = INCLINED.replace("NORMALS", normals) + discretization
+    text = _inclined(normals) + discretization
     scene = write_shared(tmp / f"{name}.toml", text)
     out = tmp / name
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
@@ -101,7 +73,7 @@ def test_3d_the_force_on_a_plane_inclined_diagonally_is_along_its_normal(shared_
     ⊥ e = (1, 2, 0)/√5 gives a tangential force tan α × the normal one, along e."""
     e = np.array([1.0, 2.0, 0.0]) / np.sqrt(5.0)
     n = np.sin(ALPHA) * e + np.array([0.0, 0.0, -np.cos(ALPHA)])
-    text = (INCLINED.replace('type = "rectangle"', 'type = "box"')
+    text = (_inclined('normals = "obstacle"').replace('type = "rectangle"', 'type = "box"')
             .replace("upper = [1.0, 0.25]", "upper = [1.0, 1.0, 0.25]")
             .replace("lower = [0.0, 0.0]", "lower = [0.0, 0.0, 0.0]")
             .replace("cells = [32, 8]", "cells = [6, 6, 2]")
@@ -111,7 +83,7 @@ def test_3d_the_force_on_a_plane_inclined_diagonally_is_along_its_normal(shared_
             .replace('motion = ["0", "-0.01*t"]', 'motion = ["0", "0", "-0.01*t"]'))
     text = re.sub(r"obstacle = \{.*\}", "obstacle = { shape = \"plane\", point = [0.0, 0.0, 0.25], "
                   f"normal = [{n[0]!r}, {n[1]!r}, {n[2]!r}] }}", text)
-    scene = write_shared(shared_tmp_path / "box.toml", text.replace("NORMALS", 'normals = "obstacle"'))
+    scene = write_shared(shared_tmp_path / "box.toml", text)
     out = shared_tmp_path / "box"
     assert cli.main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
     f = _reactions(out)
@@ -127,7 +99,7 @@ def test_3d_the_force_on_a_plane_inclined_diagonally_is_along_its_normal(shared_
      "only for type = 'signorini'"),
 ])
 def test_normals_errors_are_located(shared_tmp_path, capsys, change, key, message):
-    text = INCLINED.replace("NORMALS", change)
+    text = _inclined(change)
     if "normal_compliance" in change:
         text = text.replace('type = "signorini"\n', "").replace('motion = ["0", "-0.01*t"]\n', "")
     scene = write_shared(shared_tmp_path / "bad.toml", text)
@@ -138,8 +110,8 @@ def test_normals_errors_are_located(shared_tmp_path, capsys, change, key, messag
 
 
 def test_normals_need_an_obstacle(shared_tmp_path, capsys):
-    text = re.sub(r"obstacle = \{.*\}\n", "gap = 0.0\n", INCLINED.replace(
-        "NORMALS", 'normals = "obstacle"').replace('motion = ["0", "-0.01*t"]\n', ""))
+    text = re.sub(r"obstacle = \{.*\}\n", "gap = 0.0\n", _inclined(
+        'normals = "obstacle"').replace('motion = ["0", "-0.01*t"]\n', ""))
     scene = write_shared(shared_tmp_path / "gap.toml", text)
     assert cli.main(["validate", str(scene)]) == 2
     err = capsys.readouterr().err
@@ -149,10 +121,10 @@ def test_normals_need_an_obstacle(shared_tmp_path, capsys):
 
 def test_show_writes_the_normals_back():
     from vpcontact.scene import loads_text
-    scene = loads_text(INCLINED.replace("NORMALS", 'normals = "obstacle"'))
+    scene = loads_text(_inclined('normals = "obstacle"'))
     assert scene.contact.normals == "obstacle"
     assert loads_text(scene.to_toml()) == scene
-    default = loads_text(INCLINED.replace("NORMALS", ""))
+    default = loads_text(_inclined(""))
     assert default.contact.normals == "body" and "normals" not in default.to_toml()
 
 
