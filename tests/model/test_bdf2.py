@@ -60,6 +60,7 @@ def test_bdf2_with_varying_steps_stays_second_order():
     assert 1.7 <= rate <= 2.3, f"errors {errors}: rate {rate:.2f}"
 
 
+@pytest.mark.slow
 def test_bdf2_perzyna_flow_is_stable_and_more_accurate_than_euler():
     """The paper's 2-D viscoplastic square (k E/μ* = 2.5·10⁴ at k = 0.05) through its plastic
     limit: BDF2 stays stable and lands closer to a fine implicit-Euler reference than Euler."""

@@ -346,6 +346,7 @@ def _count_predictor_runs(monkeypatch) -> list:
     return predicted
 
 
+@pytest.mark.slow
 def test_a_slip_zone_spreading_over_a_fine_face_converges_from_the_sticking_guess(monkeypatch):
     """The dragged block on a rigid floor on 256×64 cells, k = 0.05 (bench/friction_step.py
     --floor rigid). In the second dragging step the slip zone spreads over the whole face; from
@@ -985,7 +986,8 @@ def test_3d_block_dragged_diagonally_on_a_rigid_floor_slides_against_the_drag(di
     assert errors[-1, 0] < 2e-4 and np.all(errors[:, 1] < 1e-3), errors
 
 
-@pytest.mark.parametrize("discretization", [{}, {"formulation": "mixed", "degree": 2}],
+@pytest.mark.parametrize("discretization", [{}, pytest.param({"formulation": "mixed", "degree": 2},
+                                                              marks=pytest.mark.slow)],
                          ids=["P1", "mixed"])
 def test_the_tresca_predictor_ends_at_the_coulomb_solution(discretization, monkeypatch):
     """The Tresca predictor (NodalFriction.freeze) is only a way to the step's solution: with no
@@ -1025,6 +1027,7 @@ def test_friction_in_1d_is_refused(shared_tmp_path, capsys):
         assert re.search(r"bar\.toml:\d+: contact\.friction: .*1-D", err), err
 
 
+@pytest.mark.slow
 def test_a_vi_step_stuck_at_round_off_is_accepted():
     """The scratch scene's indentation (40×10 cells, k = 0.025): SNES VI reached ||F|| = 3.1e-11
     where rtol ||F_0|| was 2.6e-11, and its steps, projected back onto the bounds, left the
@@ -1163,7 +1166,8 @@ def test_facet_sizes_on_quadrilaterals_and_hexahedra():
         assert value == pytest.approx(expected, rel=1e-12)
 
 
-@pytest.mark.parametrize("formulation,degree", [("mixed", 2), ("displacement", 2)])
+@pytest.mark.parametrize("formulation,degree", [pytest.param("mixed", 2, marks=pytest.mark.slow),
+                                                ("displacement", 2)])
 def test_the_paper_s_beam_on_a_compliant_foundation_with_tresca_friction_cuts_no_step(
         shared_tmp_path, formulation, degree):
     """The bundled 3-D beam (the paper's data: E = 1e8, μ = 1e-6) with Tresca friction on its

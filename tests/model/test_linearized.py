@@ -213,6 +213,7 @@ def _plate(scheme, k, T=0.5):
     return problem.u, problem.solver.total_iterations, steps
 
 
+@pytest.mark.slow
 def test_linearized_and_implicit_plates_converge_together_and_linearized_is_cheaper():
     """Both Euler schemes are first order; their difference falls as k → 0 (measured 4.1 %,
     1.4 %, 0.71 %, 0.11 % of max |u|), and the linearized one takes 2–3× fewer Newton
@@ -254,6 +255,7 @@ def test_the_jacobian_is_assembled_once_per_step_and_changes_nothing():
     assert diff <= 1e-7 * comm.allreduce(float(np.abs(u2).max()), op=MPI.MAX)
 
 
+@pytest.mark.slow
 def test_the_implicit_plate_recovers_from_a_diverged_large_step():
     """At k = T/5 the implicit plate's step from t = 0.15 diverges (k E/μ* = 5e4) and is cut;
     the cut steps must then converge, and the run end near a fine-step one. They did not: MUMPS

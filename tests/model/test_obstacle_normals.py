@@ -128,6 +128,7 @@ def test_show_writes_the_normals_back():
     assert default.contact.normals == "body" and "normals" not in default.to_toml()
 
 
+@pytest.mark.slow
 def test_the_3d_scratch_scene_ploughs(shared_tmp_path):
     """The bundled ``scratch_3d`` (a sphere pressed into a Perzyna block and dragged, 𝔣 = 0.2,
     mixed formulation) on 16 × 8 × 4 cells, k = 0.05: while the sphere slides, F_1/(−F_3) is

@@ -65,6 +65,7 @@ def test_plane_pressed_by_a_force_on_a_cylinder_follows_hertz(shared_tmp_path):
     assert abs(p.pressure.max() / p0 - 1) < 0.03, (p.pressure.max(), p0)
 
 
+@pytest.mark.slow
 def test_sphere_pressed_into_a_block_by_a_force_follows_hertz(shared_tmp_path):
     """3-D: a rigid sphere (R = 0.5) pressed by P into the quarter of a block (clamped below,
     symmetry planes x = 0 and y = 0): contact radius within 5 % of Hertz's for the force, the
@@ -122,7 +123,7 @@ def _indenter(tag: int, dim: int, side: float, force):
                      np.array(direction[:dim]), force_direction=direction)
 
 
-@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("dim", [2, pytest.param(3, marks=pytest.mark.slow)])
 def test_two_indenters_driven_by_opposite_forces(dim):
     """The block squeezed between two indenters pressed by 10 t and 6 t: each part's contact
     force is its own, and the clamp holds the difference."""
@@ -144,6 +145,7 @@ def test_two_indenters_driven_by_opposite_forces(dim):
     assert d_top > 0 and d_top + d_bottom > 0, (d_top, d_bottom)
 
 
+@pytest.mark.slow
 def test_indentation_creep_of_a_perzyna_block():
     """Plane strain, a Perzyna block pressed by a cylinder: F ramps to 20 over t ≤ 0.2, then
     holds. While it is held the indenter keeps sinking (the block flows) at a falling rate, and

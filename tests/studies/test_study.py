@@ -59,6 +59,7 @@ def test_bdf2_second_order_in_k(tmp_path):
         assert 1.7 <= _slope(k, [float(r["error"]) for r in rows]) <= 2.2
 
 
+@pytest.mark.slow
 def test_perzyna_2d_first_order_in_k_against_a_finer_run(tmp_path):
     """§4.2.2 (point load, Perzyna, normal compliance) on a 6×3 mesh, refining k against a run
     with k/8: implicit Euler is first order once the body flows (measured: 1.16, successive 1.10
@@ -84,6 +85,7 @@ def test_convergence_study_runs_the_scenes_own_discretization(tmp_path):
         assert "P2, implicit Euler" in text and "P1" not in text, text[:300]
 
 
+@pytest.mark.slow
 def test_cost_study_pareto_front(tmp_path):
     """Every method on a 2 × 2 grid of (h, k); the runs marked Pareto are exactly those no run
     beats in both time and error, and the advice has a sentence per method."""
