@@ -41,6 +41,7 @@ def test_normal_compliance_1d_demo_rejects_bad_r(capsys):
     assert "must be in (0, 1] and divide 1" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_signorini_3d_demo(shared_tmp_path, monkeypatch):
     monkeypatch.setenv("CI", "1")
     demo = _load("signorini_3d")
@@ -53,6 +54,7 @@ def test_signorini_3d_demo(shared_tmp_path, monkeypatch):
         assert (out / name).stat().st_size > 1000, name
 
 
+@pytest.mark.slow
 def test_signorini_2d_demo(shared_tmp_path, monkeypatch):
     # The paper's T = 1 s: the square flows past its limit load (t ≈ 0.38 s) but is still
     # above the obstacle (the smallest gap is 6.7 mm at x1 = 1).
@@ -69,6 +71,7 @@ def test_signorini_2d_demo(shared_tmp_path, monkeypatch):
         assert (out / name).stat().st_size > 1000, name
 
 
+@pytest.mark.slow
 def test_indentation_relaxation_demo(shared_tmp_path, monkeypatch):
     monkeypatch.setenv("CI", "1")
     demo = _load("indentation_relaxation")
@@ -86,6 +89,7 @@ def test_indentation_relaxation_demo(shared_tmp_path, monkeypatch):
         assert (out / name).stat().st_size > 500, name
 
 
+@pytest.mark.slow
 def test_hertz_indentation_demo(shared_tmp_path, monkeypatch):
     monkeypatch.setenv("CI", "1")
     demo = _load("hertz_indentation")
@@ -100,6 +104,7 @@ def test_hertz_indentation_demo(shared_tmp_path, monkeypatch):
         assert (out / name).stat().st_size > 200, name
 
 
+@pytest.mark.slow
 def test_indentation_creep_demo(shared_tmp_path, monkeypatch):
     """The force-driven twin of the relaxation demo: the contact force is F(t) at every step,
     and the depth grows while F is held."""
@@ -120,6 +125,7 @@ def test_indentation_creep_demo(shared_tmp_path, monkeypatch):
         assert (out / name).stat().st_size > 500, name
 
 
+@pytest.mark.slow
 def test_scratch_demo(shared_tmp_path, monkeypatch):
     """The scratch test: while the tip slides, the tangential force is 𝔣 × the normal one plus
     the ploughing of the groove's front (the contact force along the tip's normal, tilted

@@ -26,6 +26,7 @@ stiffness is not what limits it: 1e3 G/h gives the same numbers as the default 1
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from mpi4py import MPI
 from dolfinx import mesh as dmesh
 
@@ -57,6 +58,7 @@ def _half_width(x: np.ndarray, inside: np.ndarray) -> float:
     return 0.5 * (right - left)
 
 
+@pytest.mark.slow
 def test_the_stick_zone_and_the_traction_are_cattaneo_mindlins():
     comm = MPI.COMM_WORLD
     msh = _graded_block(comm, 8, 0.1)

@@ -86,6 +86,7 @@ def state(problem, Q):
     return contact @ Q, active, u[order]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("contact", ["signorini", "normal_compliance"])
 def test_rotated_problem_gives_the_same_answer(dim, contact):
@@ -103,6 +104,7 @@ def test_rotated_problem_gives_the_same_answer(dim, contact):
     assert np.abs(u1 - u0).max() <= 1e-8 * scale, np.abs(u1 - u0).max() / scale
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("contact", ["signorini", "normal_compliance"])
 def test_rotated_mixed_problem_gives_the_same_answer(contact):
     """Taylor–Hood (P2 frames at vertices and edge nodes, the pressure left unrotated)."""

@@ -155,6 +155,7 @@ def test_law_properties():
         Perzyna(Elasticity("3d", 1e8, 0.3), 1.0, 200.0, scheme="rosenbrock")
 
 
+@pytest.mark.slow
 def test_a_scene_runs_with_the_linearized_scheme_and_show_writes_it_back(shared_tmp_path):
     scene = loads_text(scene_text("plate", time=""))
     assert scene.law.scheme == "linearized"
@@ -233,6 +234,7 @@ def test_linearized_and_implicit_plates_converge_together_and_linearized_is_chea
     assert gaps[-1] < 5e-3, gaps
 
 
+@pytest.mark.slow
 def test_the_jacobian_is_assembled_once_per_step_and_changes_nothing():
     """The linearized step's Jacobian is constant within the step: assembled once per step (and
     its factors or preconditioner kept), with the answers of assembling it at every iteration."""

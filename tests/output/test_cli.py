@@ -506,6 +506,7 @@ def test_an_internal_error_is_one_line_and_exit_3_unless_a_traceback_is_asked(
         cli.main(["--traceback", "run", str(path), "--out", str(out), "--quiet"])
 
 
+@pytest.mark.slow
 def test_newton_that_diverges_to_nan_is_a_failed_step_not_a_traceback(shared_tmp_path, capsys):
     """Stiff units (E = 1e9, σ_Y = 1) with the mixed formulation: the first step's Newton
     iterate becomes non-finite; that is a failed step (rolled back, cut, and finally a clean
@@ -523,6 +524,7 @@ def test_newton_that_diverges_to_nan_is_a_failed_step_not_a_traceback(shared_tmp
         assert "the simulation failed" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_round_off_floor_of_a_displacement_driven_run_in_stiff_units(shared_tmp_path):
     """E = 1e9, σ_Y = 1, the paper's P1, driven by the indenter's motion with no load: after
     step cuts a step's initial residual is at the round-off floor of the internal forces (about
@@ -569,6 +571,7 @@ def test_perzyna_scene_builds_the_viscoplastic_law():
     assert model.problem.law.sigma_y == pytest.approx(math.sqrt(10.0))
 
 
+@pytest.mark.slow
 @pytest.mark.serial
 @pytest.mark.parametrize("verbose", [False, True])
 def test_jit_messages_only_with_verbose(tmp_path, verbose):

@@ -81,6 +81,7 @@ def _xdmf_times(path: Path) -> list:
     return [float(e.get("Value")) for e in ElementTree.parse(path).getroot().iter("Time")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sig, status", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_signal_stops_cleanly_and_resume_ends_bit_for_bit(tmp_path, sig, status):
     scene = _scene(tmp_path)
@@ -168,6 +169,7 @@ def test_resume_refusals(tmp_path, capsys):
     assert "the scene changed since the checkpoint" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_a_torn_checkpoint_write_leaves_the_last_one_usable(tmp_path):
     """A crash while writing (a half-written archive and manifest) does not spoil the previous
     checkpoint: --resume uses it and ends where an uninterrupted run ends."""
@@ -186,6 +188,7 @@ def test_a_torn_checkpoint_write_leaves_the_last_one_usable(tmp_path):
     assert (out / "contact.csv").read_bytes() == (full / "contact.csv").read_bytes()
 
 
+@pytest.mark.slow
 def test_resume_after_a_crash_that_spoiled_the_xdmf_file(tmp_path):
     """A run killed while writing leaves its HDF5 file unreadable (its header zeroed) though the
     checkpoint is intact: --resume sets the series aside (<name>.broken1.xdmf/.h5), starts it

@@ -48,6 +48,7 @@ def test_time_refinement_3d_with_active_contact():
     assert rate >= 0.9, f"time rate {rate:.2f}, errors {errors}"
 
 
+@pytest.mark.slow
 def test_mesh_and_time_refinement_2d():
     # h = 1/n and k = 0.4 h refined together up to T = 0.6 s, past the plastic limit load
     # (t ≈ 0.38 s) where the square flows. Reference: n = 32, k = 0.0125. At the limit load

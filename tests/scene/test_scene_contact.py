@@ -207,6 +207,7 @@ def test_show_writes_the_new_keys_back(shared_tmp_path, capsys):
         assert 'displacement = ["free", "-0.01*t"]' in text
 
 
+@pytest.mark.slow
 def test_turning_obstacle_is_the_same_motion_as_its_translation(shared_tmp_path):
     """A circle turned about a point off its centre moves as the translation of its centre: the
     runs with ``rotation`` and with the equivalent ``motion`` give the same contact forces and
@@ -243,6 +244,7 @@ def test_show_writes_a_rotation_back(shared_tmp_path, capsys):
     assert cli.main(["validate", str(again)]) == 0
 
 
+@pytest.mark.slow
 def test_curved_face_on_a_foundation_surface_from_a_scene(shared_tmp_path):
     """Normal compliance on a curved Γ3 (a Gmsh cylinder) against a foundation surface given as
     an obstacle: a stiff foundation carries the Signorini force, and contact.csv holds
@@ -313,6 +315,7 @@ def test_contact_csv_off_is_not_written(shared_tmp_path):
     assert (out / "reactions.csv").is_file() and (out / "summary.json").is_file()
 
 
+@pytest.mark.slow
 def test_obstacle_that_moves_away_is_reported_with_its_closest_approach(shared_tmp_path, capsys):
     """An indenter driven away from the block runs (nothing is wrong with the scene) but the run
     says that its contact part never touched, with the closest approach; a run with contact
@@ -334,6 +337,7 @@ def test_obstacle_that_moves_away_is_reported_with_its_closest_approach(shared_t
             assert warnings == [] and "warning" not in err
 
 
+@pytest.mark.slow
 def test_contact_nodes_whose_rays_miss_the_obstacle_get_no_contact(shared_tmp_path, capsys):
     """The whole top as the contact part of the indentation: the vertical rays of the nodes
     beyond the cylinder's width miss it. They are left without contact (gap = max_distance),

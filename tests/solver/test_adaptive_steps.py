@@ -47,7 +47,8 @@ def _adaptive(tol: float, time_scheme: str, t_final: float = 2.0):
     return err, steps, len(control.cuts)
 
 
-@pytest.mark.parametrize("time_scheme, order", [("euler", 1), ("bdf2", 2)])
+@pytest.mark.parametrize("time_scheme, order", [pytest.param("euler", 1, marks=pytest.mark.slow),
+                                                ("bdf2", 2)])
 def test_error_follows_the_tolerance(time_scheme, order):
     """Per-step control: k ~ tol^(1/(p+1)) and a global error ~ k^p, so error ~ tol^(p/(p+1))
     (measured slopes: 0.49 Euler, 0.64 BDF2 over these tolerances)."""

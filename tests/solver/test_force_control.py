@@ -36,6 +36,7 @@ E_STAR = E / (1 - NU ** 2)
 COMM = MPI.COMM_WORLD
 
 
+@pytest.mark.slow
 def test_plane_pressed_by_a_force_on_a_cylinder_follows_hertz(shared_tmp_path):
     """2-D, plane strain, the quarter x ≥ 0 of a cylinder (R = 1) held at its centre line; a
     rigid plane below it pressed up with P(t) per unit length on the half model."""
@@ -123,7 +124,8 @@ def _indenter(tag: int, dim: int, side: float, force):
                      np.array(direction[:dim]), force_direction=direction)
 
 
-@pytest.mark.parametrize("dim", [2, pytest.param(3, marks=pytest.mark.slow)])
+@pytest.mark.slow
+@pytest.mark.parametrize("dim", [2, 3])
 def test_two_indenters_driven_by_opposite_forces(dim):
     """The block squeezed between two indenters pressed by 10 t and 6 t: each part's contact
     force is its own, and the clamp holds the difference."""

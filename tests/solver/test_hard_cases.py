@@ -75,6 +75,7 @@ def _lowest(problem) -> float:
     return MPI.COMM_WORLD.allreduce(float(u2.min(initial=np.inf)), op=MPI.MIN)
 
 
+@pytest.mark.slow
 def test_stiff_foundation_converges_to_signorini_with_bounded_newton():
     # σ_ν = -(1/μ)(u_ν - g)_+ with μ from 1e2 (no support) to 1e-8 (1000x stiffer than the body):
     # the penetration, hence the distance to the Signorini solution, is O(μ).
@@ -153,6 +154,7 @@ def test_huge_loads_keep_the_signorini_solution_sharp():
     assert forces[1e12] == pytest.approx(forces[1e9], rel=1e-5), forces
 
 
+@pytest.mark.slow
 @pytest.mark.serial  # (two runs of 20 s; the test is rank-independent: global norms)
 def test_a_step_that_wanders_far_above_its_residual_is_cut_early():
     """The paper's 3-D beam (bundled ``signorini_3d``, mixed formulation by default) on 18×6×6

@@ -61,6 +61,7 @@ def test_force_balance_3d_every_step():
         assert contact[2] > 0.0, "the foundation pushes the beam up"
 
 
+@pytest.mark.slow
 def test_force_balance_2d_with_contact_on_the_curved_obstacle():
     # Past the paper's T the square reaches the ellipse (from t ≈ 1.3 s); run to 1.45 s.
     problem = paper.signorini_2d(6)

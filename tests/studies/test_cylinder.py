@@ -152,6 +152,7 @@ def test_mesh_tags_and_radial_sampling(shared_tmp_path):
     pytest.param("displacement", 0.3, id="displacement-nu0.3"),
     pytest.param("mixed", 0.5, id="mixed-nu0.5"),
     pytest.param("mixed", 0.4999, id="mixed-nu0.4999")])
+@pytest.mark.slow
 def test_elastic_tube_follows_lame_with_p2(shared_tmp_path, formulation, nu):
     curved = [lame_errors(*elastic_solve(shared_tmp_path, h, 2, nu, formulation, 2))
               for h in SIZES]
@@ -226,7 +227,8 @@ def hill_curve(tmp, h, formulation, degree, model="3d_standard"):
     # (0.9975, 1.0] at h = 0.2, (0.995, 0.9975] at h = 0.1
     pytest.param("displacement", 2, "3d_standard", (0.2, 0.1), (0.99, 1.005), id="P2"),
     pytest.param("displacement", 2, "3d", (0.2,), (0.99, 1.005), id="P2-paper-set"),
-    pytest.param("mixed", 2, "3d_standard", (0.2, 0.1), (0.97, 1.03), id="mixed")])
+    pytest.param("mixed", 2, "3d_standard", (0.2, 0.1), (0.97, 1.03), id="mixed",
+                 marks=pytest.mark.slow)])
 def test_perzyna_tube_reaches_hills_limit(shared_tmp_path, formulation, degree, model, sizes,
                                           band):
     limits = []

@@ -30,6 +30,7 @@ def pushed(value, axis: int, dim: int):
                  for i in range(dim))
 
 
+@pytest.mark.slow
 def test_cylinder_on_a_plane_follows_hertz(shared_tmp_path):
     results = []
     for h in (0.01, 0.005, 0.0025):
@@ -55,6 +56,7 @@ def test_cylinder_on_a_plane_follows_hertz(shared_tmp_path):
     assert errors[-1] < errors[0], f"the L2 error must fall under refinement: {errors}"
 
 
+@pytest.mark.slow
 def test_sphere_on_a_plane_follows_hertz(shared_tmp_path):
     path = hertz.sphere_msh(shared_tmp_path / "sphere.msh", h_contact=0.02)
     mesh, tags = hertz.read_msh(path, 3)
