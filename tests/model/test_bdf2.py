@@ -82,8 +82,8 @@ def test_bdf2_perzyna_flow_is_stable_and_more_accurate_than_euler():
     assert np.isfinite(err_bdf2) and err_bdf2 < 0.5 * err_euler, (err_euler, err_bdf2)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("formulation,degree", [("displacement", 1), ("mixed", 2)])
+@pytest.mark.parametrize("formulation,degree", [("displacement", 1),
+                                                pytest.param("mixed", 2, marks=pytest.mark.slow)])
 def test_bdf2_is_second_order_in_plane_strain(formulation, degree):
     """A Perzyna square in plane strain on rollers, ε_xx = 2e-3 (1 − cos πt)/2 (ten times the
     yield strain) to t = 1: a homogeneous state, so the only error is the time scheme's. The

@@ -86,7 +86,6 @@ def state(problem, Q):
     return contact @ Q, active, u[order]
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("dim", [2, 3])
 @pytest.mark.parametrize("contact", ["signorini", "normal_compliance"])
 def test_rotated_problem_gives_the_same_answer(dim, contact):
@@ -104,7 +103,6 @@ def test_rotated_problem_gives_the_same_answer(dim, contact):
     assert np.abs(u1 - u0).max() <= 1e-8 * scale, np.abs(u1 - u0).max() / scale
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("contact", ["signorini", "normal_compliance"])
 def test_rotated_mixed_problem_gives_the_same_answer(contact):
     """Taylor–Hood (P2 frames at vertices and edge nodes, the pressure left unrotated)."""

@@ -56,7 +56,6 @@ def _run(tmp, name, text, capsys=None):
     return code, out
 
 
-@pytest.mark.slow
 def test_two_indenters_squeeze_a_block_as_its_symmetric_half_says(shared_tmp_path):
     """A block clamped at one end, pressed by one indenter from above and one from below,
     mirror images of each other: the contact force of each equals the one indenter's on the
@@ -100,7 +99,6 @@ def test_two_indenters_squeeze_a_block_as_its_symmetric_half_says(shared_tmp_pat
         assert min(float(r[7]) for r in mine) < 0     # a compressive pressure
 
 
-@pytest.mark.slow
 def test_indenter_on_a_body_resting_on_a_foundation(shared_tmp_path):
     """A Signorini indenter on top, normal compliance (a deformable foundation) below: both
     parts carry force, the foundation's equals the integral of its law over the nodes' pressures

@@ -591,7 +591,6 @@ def test_a_clamped_block_pressed_onto_a_compliant_floor_with_friction(press):
     assert 0 < slipping < pressed, (slipping, pressed)
 
 
-@pytest.mark.slow
 def test_friction_on_a_rigid_and_on_a_compliant_part_of_one_scene():
     """A block clamped at its left end, pressed by a rigid plane with Coulomb friction
     (Signorini, nodal friction) onto a compliant floor with Coulomb friction, then dragged by
@@ -956,9 +955,7 @@ def test_friction_on_a_deforming_obstacle_is_refused(shared_tmp_path, capsys):
     assert not out.exists()
 
 
-@pytest.mark.parametrize("discretization",
-                         [{}, pytest.param({"formulation": "mixed"}, marks=pytest.mark.slow)],
-                         ids=["P1", "mixed"])
+@pytest.mark.parametrize("discretization", [{}, {"formulation": "mixed"}], ids=["P1", "mixed"])
 def test_3d_block_dragged_diagonally_on_a_rigid_floor_slides_against_the_drag(discretization):
     """3-D on a rigid floor (Signorini, nodal friction with two tangential unknowns per node): a
     block dragged along (1, 2, 0)/√5 slides with every contact node slipping, and its tangential
@@ -1169,8 +1166,7 @@ def test_facet_sizes_on_quadrilaterals_and_hexahedra():
         assert value == pytest.approx(expected, rel=1e-12)
 
 
-@pytest.mark.parametrize("formulation,degree", [pytest.param("mixed", 2, marks=pytest.mark.slow),
-                                                ("displacement", 2)])
+@pytest.mark.parametrize("formulation,degree", [("mixed", 2), ("displacement", 2)])
 def test_the_paper_s_beam_on_a_compliant_foundation_with_tresca_friction_cuts_no_step(
         shared_tmp_path, formulation, degree):
     """The bundled 3-D beam (the paper's data: E = 1e8, μ = 1e-6) with Tresca friction on its

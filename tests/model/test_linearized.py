@@ -155,7 +155,6 @@ def test_law_properties():
         Perzyna(Elasticity("3d", 1e8, 0.3), 1.0, 200.0, scheme="rosenbrock")
 
 
-@pytest.mark.slow
 def test_a_scene_runs_with_the_linearized_scheme_and_show_writes_it_back(shared_tmp_path):
     scene = loads_text(scene_text("plate", time=""))
     assert scene.law.scheme == "linearized"

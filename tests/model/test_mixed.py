@@ -258,7 +258,6 @@ def _paper_3d(linear: str, T: float, n: int = 2, options: dict | None = None):
     return _bundled_3d("signorini_3d", linear, T, n, options)
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("stars", ["auto", "true"])
 def test_block_preconditioner_inside_the_vi_matches_the_direct_solver(stars):
     """The iterative solver of the mixed formulation (FGMRES/GMRES with PCFIELDSPLIT: p-multigrid

@@ -170,7 +170,6 @@ COLUMN_CASES = [  # (α, κ): the foundation is κ times as stiff as the column 
 ]
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("alpha, kappa", COLUMN_CASES)
 def test_column_2d_matches_closed_form_and_balances_forces(alpha, kappa):
     mu = compliance_mu(alpha, kappa)
@@ -270,7 +269,6 @@ ONSET_GAP = {"elastic": GAP, "perzyna": 1e-3}  # contact from t ≈ 0.43 for bot
 MAX_NEWTON = 15  # per attempt: a step needing more is rejected and retried with k/2
 
 
-@pytest.mark.slow
 @pytest.mark.parametrize("law_name", ["elastic", "perzyna"])
 @pytest.mark.parametrize("alpha", [1.0, 0.5, 0.1])
 def test_contact_onset_mid_run(law_name, alpha):
@@ -319,7 +317,6 @@ def test_contact_onset_mid_run(law_name, alpha):
         f"{law_name}, alpha = {alpha}: {work} Newton iterations in all, rejected attempts included")
 
 
-@pytest.mark.slow
 def test_paper_2d_geometry_with_a_traction_patch():
     """§4.2.2's data (Ω = (0,6)×(0,3), clamped at x1 = 6, μ = 100, g = 0, α = 1, Perzyna) with the
     point load (0, -10t) at (3, 3) replaced by the same force spread over the top patch
@@ -433,7 +430,6 @@ def test_residual_and_jacobian_are_finite_at_contact_onset(alpha, penetration, f
     assert b.dot(ones) == pytest.approx(-(penetration ** alpha) / mu, rel=1e-12, abs=0.0)
 
 
-@pytest.mark.slow
 def test_gap_as_number_constant_expression_or_function_of_x():
     u, v, du, n, ds = _square_forms(lambda x: np.vstack([0 * x[0], -0.2 + 0 * x[0]]))
     mesh = u.function_space.mesh

@@ -31,7 +31,6 @@ def _global_max(a):
     return MPI.COMM_WORLD.allreduce(float(np.abs(a).max(initial=0.0)), op=MPI.MAX)
 
 
-@pytest.mark.slow
 def test_elastic_plane_strain_equals_a_dolfinx_solve_with_lame_constants():
     problem, tags = _cantilever(PlaneStrain(Elastic(Elasticity("3d", E, NU))))
     problem.step(1.0)
@@ -53,7 +52,7 @@ def test_elastic_plane_strain_equals_a_dolfinx_solve_with_lame_constants():
     assert np.allclose(s33, NU * (s[:, 0] + s[:, 1]), rtol=1e-10, atol=1e-10 * _global_max(s))
 
 
-@pytest.mark.parametrize("formulation", ["displacement", pytest.param("mixed", marks=pytest.mark.slow)])
+@pytest.mark.parametrize("formulation", ["displacement", "mixed"])
 def test_perzyna_plane_strain_limits_and_flow(formulation):
     elastic, _ = _cantilever(PlaneStrain(Elastic(Elasticity("3d", E, NU))), formulation)
     rigid, _ = _cantilever(PlaneStrain(Perzyna(Elasticity("3d_standard", E, NU), 1e12, 200.0)),

@@ -45,7 +45,6 @@ def test_q1_stiffness_has_only_the_rigid_modes(cell, rigid):
     assert _zero_modes(msh, 1) > rigid  # one point per cell: hourglass modes (the test bites)
 
 
-@pytest.mark.slow
 def test_point_load_on_hexahedra_is_carried(scene_text, shared_tmp_path):
     """Under one point load, one-point integration left hourglass modes that Newton could not
     resolve (50 iterations, no convergence); an elastic step is one Newton iteration."""
@@ -57,7 +56,6 @@ def test_point_load_on_hexahedra_is_carried(scene_text, shared_tmp_path):
     assert summary["reactions"]["final"]["bottom"][2] == pytest.approx(1.0, rel=1e-9)
 
 
-@pytest.mark.slow
 def test_indenter_on_hexahedra_is_felt(scene_text, shared_tmp_path):
     """An ellipsoid pushed 0.01 into a hexahedral block: contact forms, u_ν = g wherever the
     pressure is compressive, and the contact force is balanced by the support. (With one point

@@ -68,8 +68,7 @@ def test_gmsh_scene_runs_with_tagged_parts(shared_tmp_path):
     assert low < 0.0 and np.isfinite(u).all()
 
 
-@pytest.mark.parametrize("contact", [pytest.param("normal_compliance", marks=pytest.mark.slow),
-                                     "signorini"])
+@pytest.mark.parametrize("contact", ["normal_compliance", "signorini"])
 def test_friction_on_a_second_order_gmsh_mesh(shared_tmp_path, contact):
     """Six-node triangles from Gmsh, Coulomb friction on the floor: the stick stiffness's facet
     size comes from the facet Jacobian on their (possibly curved) facets, as FFCx has no

@@ -207,7 +207,6 @@ def test_show_writes_the_new_keys_back(shared_tmp_path, capsys):
         assert 'displacement = ["free", "-0.01*t"]' in text
 
 
-@pytest.mark.slow
 def test_turning_obstacle_is_the_same_motion_as_its_translation(shared_tmp_path):
     """A circle turned about a point off its centre moves as the translation of its centre: the
     runs with ``rotation`` and with the equivalent ``motion`` give the same contact forces and
@@ -315,7 +314,6 @@ def test_contact_csv_off_is_not_written(shared_tmp_path):
     assert (out / "reactions.csv").is_file() and (out / "summary.json").is_file()
 
 
-@pytest.mark.slow
 def test_obstacle_that_moves_away_is_reported_with_its_closest_approach(shared_tmp_path, capsys):
     """An indenter driven away from the block runs (nothing is wrong with the scene) but the run
     says that its contact part never touched, with the closest approach; a run with contact

@@ -124,8 +124,7 @@ def _indenter(tag: int, dim: int, side: float, force):
                      np.array(direction[:dim]), force_direction=direction)
 
 
-@pytest.mark.slow
-@pytest.mark.parametrize("dim", [2, 3])
+@pytest.mark.parametrize("dim", [2, pytest.param(3, marks=pytest.mark.slow)])
 def test_two_indenters_driven_by_opposite_forces(dim):
     """The block squeezed between two indenters pressed by 10 t and 6 t: each part's contact
     force is its own, and the clamp holds the difference."""

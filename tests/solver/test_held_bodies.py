@@ -23,7 +23,6 @@ def _rows(path):
             for i, name in enumerate(header)}
 
 
-@pytest.mark.slow
 def test_a_block_pressed_onto_a_floor_is_held_by_it(scene_text, shared_tmp_path):
     """No Dirichlet part: the floor holds the block vertically, nothing horizontally (the
     loads do not push it that way). The floor carries the whole load, the stabilising spring
@@ -68,7 +67,6 @@ def test_a_block_pulled_off_the_floor_stops_with_no_equilibrium(scene_text, shar
     assert not summary["completed"] and "no equilibrium" in summary["error"]
 
 
-@pytest.mark.slow
 def test_a_block_squeezed_by_two_indenters_with_equal_forces(shared_tmp_path):
     """No Dirichlet part: two indenters driven by equal and opposite forces hold the block
     between them; each carries its force."""
