@@ -33,8 +33,10 @@ import ufl
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from vpcontact.cli import configure_logging
-from benchlib import machine, mesh_size, output_file, positive_count, save
+from bench.benchlib import machine, mesh_size, output_file, positive_count, save
 from vpcontact.model import Elasticity, Perzyna, Signorini
 from vpcontact.solver import Loads, QuasistaticProblem, StepControl, advance, tag_facets, time_split
 

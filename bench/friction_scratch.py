@@ -25,8 +25,10 @@ from pathlib import Path
 
 from mpi4py import MPI
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import check_cells, machine, output_file, positive_float, positive_int, save  # noqa: E402
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from bench.benchlib import (check_cells, machine, output_file, positive_float,  # noqa: E402
+                            positive_int, save)
 
 from vpcontact import scene as scenes  # noqa: E402
 from vpcontact.scene import build  # noqa: E402

@@ -2,7 +2,7 @@
 """Benchmark: what friction costs per step.
 
 Target (issue "Friction"): a frictional step costs at most 1.5× the frictionless step of the same
-problem. The problem is the test's block (tests/test_friction.py) on a finer mesh: an elastic
+problem. The problem is the test's block (tests/model/test_friction.py) on a finer mesh: an elastic
 block (plane strain, E = 1000, ν = 0.3) [0, 1] × [0, 0.25] pressed onto a normal-compliance
 foundation (μ = 1e-3) by its top (u_2 = −0.002 over t ≤ 0.5), then dragged (u_1 = 0.02 (t − 0.5));
 with Coulomb friction (𝔣 = 0.3) and without, k = 0.05; with ``--floor rigid`` the foundation is
@@ -27,8 +27,9 @@ import numpy as np
 from dolfinx import mesh as dmesh
 from mpi4py import MPI
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import check_cells, machine, output_file, positive_int, save  # noqa: E402
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from bench.benchlib import check_cells, machine, output_file, positive_int, save  # noqa: E402
 
 from vpcontact.model import Elastic, Elasticity, NormalCompliance, PlaneStrain, Signorini  # noqa: E402
 from vpcontact.model.friction import Friction  # noqa: E402

@@ -2,7 +2,8 @@
 """Benchmark: nanoseconds per quadrature point of the C++ kernels against vectorised numpy.
 
 Targets (issue "[5 of 5]"): the C++ kernels ≥ 20× faster than a numpy implementation of the same
-mathematics (bench/numpy_reference.py), and ≤ 100 ns per point for the 3-D implicit update.
+mathematics (tests/reference/numpy_reference.py, the tests' oracle), and ≤ 100 ns per point for
+the 3-D implicit update.
 For each model (1-D, plane stress, 3-D) and branch (elastic: every point inside K; plastic:
 every point outside), times the projection P_K, the explicit update (σ only, as the solver calls
 it: its tangent is the constant E, written once per step size) and the implicit update with its
@@ -24,8 +25,10 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
-import numpy_reference as ref
-from benchlib import machine, output_file, positive_count, positive_int, save
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from tests.reference import numpy_reference as ref
+from bench.benchlib import machine, output_file, positive_count, positive_int, save
 from vpcontact import kernels
 
 E, NU, SIGMA_Y, MU_STAR, DT = 1e8, 0.3, np.sqrt(10.0), 200.0, 0.01

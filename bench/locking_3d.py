@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import sys
 import time
 from pathlib import Path
 
@@ -24,7 +25,9 @@ import numpy as np
 from dolfinx import geometry
 from mpi4py import MPI
 
-from benchlib import check_steps, machine, mesh_size, output_file, positive_float, save
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from bench.benchlib import check_steps, machine, mesh_size, output_file, positive_float, save
 from vpcontact import scene as scenes
 from vpcontact.solver import StepControl, advance
 

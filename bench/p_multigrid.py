@@ -5,7 +5,7 @@ coarse problem under GAMG; :mod:`vpcontact.solver.pc.p_multigrid`): ``p_multigri
 the vertex stars, ``p_multigrid_chebyshev`` with two Chebyshev–Jacobi sweeps (as before the
 stars).
 
-Problem (single linear solves, as ``bench/mixed_pc_prototype.py``): the beam (0,3)×(0,1)×(0,1)
+Problem (single linear solves): the beam (0,3)×(0,1)×(0,1)
 on 3n×n×n tetrahedra, clamped at x = 0, Taylor–Hood P2–P1, E = 1e8, ν = 0.3, the tangent of the
 paper's 3-D test once it flows: G_eff = 10³ on x < 2 (the collapsed shear stiffness), G beyond.
 ``--form dev``: vpcontact's unknowns (p the mean stress, A = 2G_eff dev ε : ε); ``herrmann``:
@@ -37,12 +37,13 @@ from dolfinx.fem.petsc import assemble_matrix, assemble_matrix_block, assemble_v
 from mpi4py import MPI
 from petsc4py import PETSc
 
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 import vpcontact  # noqa: F401  (one BLAS thread per process)
 from vpcontact.solver.near_nullspace import rigid_body_modes
 from vpcontact.solver.pc import fieldsplit, p_multigrid
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from benchlib import machine, mesh_size, output_file, save  # noqa: E402
+from bench.benchlib import machine, mesh_size, output_file, save  # noqa: E402
 
 E, NU, G_PLASTIC, RTOL = 1e8, 0.3, 1e3, 1e-8
 GAMG_U = {"fieldsplit_u_pc_type": "gamg", "fieldsplit_u_pc_gamg_threshold": 0.02,

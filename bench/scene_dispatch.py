@@ -31,8 +31,10 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from vpcontact.cli import configure_logging
-from benchlib import check_cells, machine, output_file, positive_count, positive_int, save
+from bench.benchlib import check_cells, machine, output_file, positive_count, positive_int, save
 from vpcontact import scene as scenes
 from vpcontact.scene import build
 from vpcontact.solver import DEFAULT_OPTIONS

@@ -31,8 +31,11 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 from mpi4py import MPI
 
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from vpcontact.cli import configure_logging
-from benchlib import check_steps, key_value, machine, mesh_size, output_file, positive_float, save
+from bench.benchlib import (check_steps, key_value, machine, mesh_size, output_file,
+                            positive_float, save)
 from vpcontact.paper import signorini as paper
 from vpcontact.solver import DEFAULT_OPTIONS, time_split
 from vpcontact.solver import StepControl, advance

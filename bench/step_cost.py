@@ -41,9 +41,11 @@ from pathlib import Path
 import numpy as np
 from mpi4py import MPI
 
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from vpcontact.cli import configure_logging
-from benchlib import (check_cells, check_steps, key_value, machine, mesh_size, output_file,
-                      positive_float, positive_int, positive_or_inf, save)
+from bench.benchlib import (check_cells, check_steps, key_value, machine, mesh_size,
+                            output_file, positive_float, positive_int, positive_or_inf, save)
 
 WINDOWS = {2: (0.4, 0.5), 3: (0.3, 0.4)}  # timed interval per dimension [s]
 RUN_IN_STEP, STEP = 0.02, 0.01

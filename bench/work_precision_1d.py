@@ -19,8 +19,9 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from benchlib import check_steps, machine, positive_int, save  # noqa: E402
+if not __package__:  # run as a file (python bench/x.py): import bench, tests from the repo root
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+from bench.benchlib import check_steps, machine, positive_int, save  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 from vpcontact import scene as scenes  # noqa: E402
 from vpcontact import studies as study  # noqa: E402

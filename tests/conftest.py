@@ -1,5 +1,6 @@
 # SPDX-License-Identifier: MIT
-"""Shared fixtures: a temporary folder that is the same on every MPI rank.
+"""Shared fixtures: a temporary folder that is the same on every MPI rank, and the shared scene
+files under tests/scenes/ (``scene_text``, ``scene_path``; see tests/support/scenes.py).
 
 On more than one rank, a test that fails on some ranks only can leave the others waiting in a
 collective call of the test. So after each test the ranks meet, on a communicator of their own
@@ -34,6 +35,21 @@ _failed: set = set()  # the tests that failed on this rank (until the ranks met 
 def shared_tmp_path(tmp_path) -> Path:
     """rank 0's tmp_path, broadcast so that all ranks read and write the same folder."""
     return Path(MPI.COMM_WORLD.bcast(str(tmp_path), root=0))
+
+
+@pytest.fixture
+def scene_text():
+    """``scene_text(name, **values)``: the text of ``tests/scenes/<name>.toml`` with its
+    ``${key}`` placeholders filled (:func:`tests.support.scenes.scene_text`)."""
+    from tests.support.scenes import scene_text  # (here: test_mpi_abort runs a copy of this file)
+    return scene_text
+
+
+@pytest.fixture
+def scene_path():
+    """``scene_path(name)``: the file ``tests/scenes/<name>.toml``."""
+    from tests.support.scenes import scene_path
+    return scene_path
 
 
 def pytest_runtest_logreport(report):

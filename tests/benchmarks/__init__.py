@@ -1,0 +1,2 @@
+# SPDX-License-Identifier: MIT
+"""The benchmark scripts under bench/: their command lines and fits."""

@@ -1,0 +1,2 @@
+# SPDX-License-Identifier: MIT
+"""Tests that launch mpirun or check what several ranks give."""

@@ -1,0 +1,2 @@
+# SPDX-License-Identifier: MIT
+"""Regression guards: the bundled scenes' summaries against stored values."""
