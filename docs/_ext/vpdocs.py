@@ -51,7 +51,7 @@ def generate(app) -> None:
     index = ["# Demos", "",
              "Literate scripts in `demos/`: each page is the script's header (the model, the data, "
              "what the figures show and what could be extended) followed by its code. The test "
-             "suite runs every demo (`tests/test_demos.py`).", "",
+             "suite runs every demo (`tests/demos/test_demos.py`).", "",
              "```{toctree}", ":maxdepth: 1", ""] + entries + ["```", ""]
     _write(out / "demos" / "index.md", "\n".join(index))
 

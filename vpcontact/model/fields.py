@@ -387,7 +387,8 @@ class DisplacementPressure:
         lay 25 times below it — and GMRES paid about one iteration per such node; inside a wide
         flowing region the points and their patches agree and the cap does not act (where it
         did, with the patch mean alone, GMRES took 40 % more iterations:
-        bench/field_split_parts.py, which also builds the uncapped matrix)."""
+        bench/results/field_split_parts_*.json, from a script that also built the uncapped
+        matrix; git history keeps it)."""
         q, dp = ufl.TestFunction(self.Q), ufl.TrialFunction(self.Q)
         if self._patch_stiffness is None:
             self._patch_stiffness = fem.Function(self.Q, name="patch_shear_stiffness")

@@ -49,7 +49,7 @@ from vpcontact.model.nodal_terms import displacement_positions
 
 #: k_t relative to G / h (h the local facet size). Stiffer sticks are closer to an exact one but
 #: Newton crosses their narrower stick interval (2b/k_t) less reliably: with 1e3 G/h the block
-#: of tests/test_friction.py pressed with P2 displacements cycles between stick and slip for 50
+#: of tests/model/test_friction.py pressed with P2 displacements cycles between stick and slip for 50
 #: iterations in its first step; with 1e2 it takes 4 (the last mesh-extent stiffness, 1e3 G/L,
 #: was 62 G/h on that mesh and far softer on refined ones).
 STICK_STIFFNESS = 1e2
@@ -93,7 +93,7 @@ class FrictionLaw(Protocol):
 #: load stops pressing (a block clamped at one end, pressed by a rigid plane onto the frictional
 #: floor until t = 0.5, then held) full steps cycled between two iterates from both guesses and
 #: the step was cut 10 times (291 Newton iterations in the run); ``l2`` takes 20 there (49 in
-#: the run), ``cp`` 17 (46). On the dragged block of tests/test_friction.py ``l2`` takes what
+#: the run), ``cp`` 17 (46). On the dragged block of tests/model/test_friction.py ``l2`` takes what
 #: full steps take (6, 1, 1, 1, 1 pressing, 2, 1, 0, 0, 0 sliding), ``cp`` 7 in the first step;
 #: backtracking 40 and cut steps.
 COMPLIANT_SNES_DEFAULTS = {"snes_linesearch_type": "l2"}
@@ -268,7 +268,7 @@ class StickingGuess:
     Jacobian, 1 there and 0 at every other iterate). From the extrapolated guess alone, a step
     that reverses the drag started with every node slipping forward; the stick interval, 2b/k_t
     wide, was jumped over and Newton cycled between slipping forward and back (the dragged block
-    of tests/test_friction.py pulled back by 1e−5 / 1e−4 / 1e−3 within a step: 34 / 32 / 22
+    of tests/model/test_friction.py pulled back by 1e−5 / 1e−4 / 1e−3 within a step: 34 / 32 / 22
     iterations and a step cut; from the sticking guess 1 / 1 / 1, so 6 in all with the try
     before). Starting every step sticking instead costs monotone steps, where the extrapolation
     has the slip right: 5 Newton iterations per pressing step instead of 1, 3 per dragging step

@@ -213,7 +213,7 @@ class CompliancePart:
         """SNES options this part needs: for α < 1 with a law linear in ε, the critical-point
         line search (p ↦ p^α is concave: full steps can overshoot past contact onset and cycle;
         ``cp`` took fewer iterations than ``bt`` in every case measured, see the module
-        docstring, and the stiff column of tests/test_normal_compliance_nd.py 4, 2, 2, …
+        docstring, and the stiff column of tests/model/test_normal_compliance_nd.py 4, 2, 2, …
         iterations from its onset step against 6, 4, 3, …). With friction, what its law asks
         for on a compliant part (:attr:`~vpcontact.model.friction.FrictionLaw.
         compliant_snes_defaults`; with α < 1 and a law linear in ε the part keeps ``cp``, for
@@ -242,7 +242,7 @@ class CompliancePart:
             # estimated for its integrand — 10 and 26 for P1, whose friction terms have
             # quotients and roots — and the Jacobian is then not the derivative of the discrete
             # residual: Newton converged linearly (11, 10, 14, 14, 11 iterations per pressing
-            # step of the dragged block in tests/test_friction.py; 7, 1, 1, 1, 1 with one rule).
+            # step of the dragged block in tests/model/test_friction.py; 7, 1, 1, 1, 1 with one rule).
             degree = FRICTION_QUADRATURE_EXTRA + 2 * u.ufl_element().degree()
             ds = ufl.Measure("ds", domain=ds.ufl_domain(), subdomain_data=ds.subdomain_data(),
                              metadata={"quadrature_degree": degree})

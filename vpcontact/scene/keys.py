@@ -5,7 +5,7 @@ its type, default, unit, allowed values and a one-line description.
 It is the one source of the allowed-key lists that the readers (:mod:`vpcontact.scene.read`,
 :mod:`vpcontact.scene.physics`) check tables against, of the simple defaults they fall back to,
 and of the scene-key reference in the manual (:func:`reference_markdown`, written into the Sphinx
-source tree at build time). ``tests/test_scene_key_reference.py`` checks that every key a reader
+source tree at build time). ``tests/scene/test_scene_key_reference.py`` checks that every key a reader
 accepts has its entry here, with the default the reader uses.
 
 Tables are named by their path pattern: ``""`` is the top level, ``boundary.<name>`` any boundary

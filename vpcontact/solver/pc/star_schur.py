@@ -12,7 +12,7 @@ follow the tangent wherever the body flows, its contact constraints (the active 
 of M are zero) included. The weighted pressure mass S_p (:mod:`~vpcontact.model.fields`) takes
 each point's compliance and cannot see how a thin soft layer is held by its stiff neighbours:
 on the paper's 3-D test (the linearized scheme's window, its first step's second system;
-``bench/field_split_parts.py``) GMRES takes 15 / 16 / 21 iterations with S_p at 6 400 /
+``bench/results/field_split_parts_*.json``) GMRES takes 15 / 16 / 21 iterations with S_p at 6 400 /
 44 508 / 143 128 unknowns and 16 / 17 / 16 with Ŝ (six Chebyshev–Jacobi sweeps), against 14 /
 13 / 12 with the cycle's own Schur complement formed. Ŝ couples pressure nodes two vertices
 apart (about 54 entries per row in 3-D against S_p's 14); it is assembled from the factors with

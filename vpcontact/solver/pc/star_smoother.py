@@ -14,7 +14,7 @@ motions, as in the patch smoothers of robust multigrid for nearly incompressible
 One sweep solves every star exactly for the same residual and adds the corrections, damped:
 y = ω Σ_p R_pᵀ A_pp⁻¹ R_p b, with ω = 1/2 (an edge midpoint lies in two stars, a vertex in
 one; undamped, the Krylov solves of the flowing beam diverged, and with ω = 1/2 each sweep
-lowers the error's energy on an elasticity matrix: ``tests/test_star_smoother.py``). The blocks
+lowers the error's energy on an elasticity matrix: ``tests/solver/test_star_smoother.py``). The blocks
 A_pp are factorized (dense LU) in C++ (``cpp_kernels/include/vpcontact/patch_smoother.hpp``)
 whenever the matrix changes. On several processes each one smooths its own rows: a star keeps
 the unknowns this process owns, and couplings to other processes' unknowns are left out of its
