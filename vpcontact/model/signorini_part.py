@@ -62,8 +62,8 @@ class SignoriniPart:
 
     def snes_defaults(self, linear_law: bool) -> dict:
         """SNES options this part needs: the VI solver, and with friction what its law asks for
-        on a rigid obstacle (:attr:`~vpcontact.model.friction.FrictionLaw.rigid_snes_defaults`:
-        Coulomb's critical-point line search)."""
+        on a rigid obstacle (the law's ``rigid_snes_defaults``,
+        :class:`~vpcontact.model.friction.FrictionLaw`: Coulomb's critical-point line search)."""
         needs = {} if self.friction is None else self.friction.friction.rigid_snes_defaults
         return {"snes_type": "vinewtonrsls", **needs}
 

@@ -2,7 +2,7 @@
 """The forces that hold the body at the current state: each Dirichlet part's reaction and each
 contact part's force, from the equilibrium residual (σ, ε(v)) − (f, v) − P (P the point loads),
 or, for a part that reports its own term's force, from that term
-(:attr:`~vpcontact.model.contact.ContactPart.reports_law_force`)."""
+(``reports_law_force`` of :class:`~vpcontact.model.contact.ContactPart`)."""
 
 from __future__ import annotations
 
