@@ -10,5 +10,5 @@ echo "[test] again on 2 MPI ranks (tests not marked serial)"
 # each rank gets its own pytest base folder (they would race cleaning a shared one). A failure that
 # leaves a rank stuck aborts the job (tests/conftest.py); the time limit is the backstop for any
 # other hang.
-timeout --kill-after=30 "${VPCONTACT_MPI_TEST_TIMEOUT:-1200}" mpirun -n 2 bash -c 'exec "$0" -m pytest -q -p no:cacheprovider --basetemp="/tmp/vpcontact-pytest-$(id -u)-${OMPI_COMM_WORLD_RANK:-0}" -m "not serial" "$@"' \
+timeout --kill-after=30 "${VPCONTACT_MPI_TEST_TIMEOUT:-2400}" mpirun -n 2 bash -c 'exec "$0" -m pytest -q -p no:cacheprovider --basetemp="/tmp/vpcontact-pytest-$(id -u)-${OMPI_COMM_WORLD_RANK:-0}" -m "not serial" "$@"' \
   "$VPCONTACT_PYTHON" "$@"
