@@ -306,7 +306,7 @@ def test_aimed_krylov_solves_save_newton_iterations_and_keep_the_answers(monkeyp
 
     direct, _ = _flowing_beam("direct")
     aimed, aimed_its = _flowing_beam("iterative")
-    assert aimed.solver._aimed_solves
+    assert aimed.solver.test.aimed
     _assert_same_answers(aimed, direct)
     monkeypatch.setattr(linear, "step_rtol", lambda it, fnorm, target: linear.ITERATIVE_RTOL)
     fixed, fixed_its = _flowing_beam("iterative")

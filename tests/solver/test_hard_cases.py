@@ -169,7 +169,7 @@ def test_a_step_that_wanders_far_above_its_residual_is_cut_early():
     runs = []
     for stagnation_its in (12, 0):
         problem = build(scenes.load_bundled("signorini_3d", (18, 6, 6), 0.02)).problem
-        problem.solver._stagnation_its = stagnation_its  # (read from the options at set-up)
+        problem.solver.test.stagnation_its = stagnation_its  # (read from the options at set-up)
         steps = list(advance(problem, 0.02, StepControl(0.02, max_cuts=4)))
         assert steps[-1].time == pytest.approx(0.02)
         assert len(steps) == 2  # the step was cut once; its halves converged

@@ -217,19 +217,6 @@ class StepSolver:
     def kernel_calls(self, value: int) -> None:
         self._assembly.kernel_calls = value
 
-    # (kept for the tests that set or read them)
-    @property
-    def _stagnation_its(self) -> int:
-        return self.test.stagnation_its
-
-    @_stagnation_its.setter
-    def _stagnation_its(self, value: int) -> None:
-        self.test.stagnation_its = value
-
-    @property
-    def _aimed_solves(self) -> bool:
-        return self.test.aimed
-
     @property
     def stagnated(self) -> bool:
         """The last run stopped because it stagnated (:mod:`.convergence`)."""
