@@ -81,15 +81,14 @@ def test_run_records_its_overrides_in_the_summary(shared_tmp_path):
 def test_a_bad_override_exits_2_located_and_writes_nothing(command, shared_tmp_path, capsys):
     out = shared_tmp_path / "never"
     extra = ["--out", str(out), "--quiet"] if command == "run" else []
-    code = cli.main([command, "elastic_2d", *extra, "--set", "law.type=perzyna",
-                     "--set", "law.sigma_y=1", "--set", "law.mu_sta=50"])
+    code = cli.main([command, "elastic_2d", *extra, "--set", "time.k=0.5",
+                     "--set", "law.mu_sta=50"])
     captured = capsys.readouterr()
     assert code == 2 and not out.exists()
     if ROOT:
-        assert ("error: --set law.mu_sta: unknown key 'mu_sta'; did you mean 'mu_star'?"
-                in captured.err), captured.err
-        assert "--set law: missing required key 'mu_star'" not in captured.err
-        assert "Traceback" not in captured.err and captured.out == ""
+        assert captured.err == ("error: --set law.mu_sta: unknown key 'mu_sta'; did you mean "
+                                "'mu_star'?\n"), captured.err
+        assert captured.out == ""
 
 
 def test_validate_and_show_take_overrides(capsys):

@@ -16,6 +16,7 @@ under an overridden key is located at the override (``--set law.mu_sta: unknown 
 
 from __future__ import annotations
 
+import copy
 import re
 import tomllib
 from dataclasses import dataclass
@@ -109,7 +110,7 @@ def _set(data: dict, tokens: list[str | int], value: Any) -> str | None:
             hint = f" (name an item, e.g. {path}[0].{token})" if isinstance(node, list) else ""
             return f"{path} is {type_name(node)}, not a table{hint}"
         if following is None:
-            node[token] = value
+            node[token] = copy.deepcopy(value)  # (a later override of an item changes the copy)
             return None
         if isinstance(token, str) and token not in node:
             if isinstance(following, int):

@@ -65,7 +65,8 @@ def _yield_set(t: Table, dim: int | None) -> str | None:
         return t.choice("yield_set", ("paper", "von_mises"), default("law", "yield_set"))
     if t.data.get("yield_set", "von_mises") != "von_mises":
         t.add("yield_set", "only 'von_mises' is available in 1-D and 2-D (|σ| ≤ σ_Y in 1-D, "
-                           "plane-stress von Mises in 2-D); 'paper' is a 3-D option")
+                           "von Mises in plane stress and plane strain); 'paper' is a 3-D "
+                           "option")
         return None
     return "von_mises"
 

@@ -111,6 +111,8 @@ class Report:
     def origin(self, path: str) -> str | None:
         """The override that ``path`` belongs to: one set at ``path`` or above it, or one that
         created the table ``path`` lies in (a table the file does not have); else ``None``."""
+        if not self.overridden:
+            return None
         for key in self.overridden:
             if _within(path, key):
                 return key
