@@ -187,6 +187,7 @@ def test_defaults_3d_perzyna_and_contact():
     text = edit(BASE, 'type = "rectangle"\ncells = [4, 4]', 'type = "box"\ncells = [2, 2, 2]')
     text = edit(text, 'axis = "y", value = 1.0', 'axis = "z", value = 1.0')
     text = edit(text, 'axis = "y", value = 0.0', 'axis = 2, value = 0.0')
+    text = edit(text, 'plane = "stress"\n', "")
     text += '\n[law]\ntype = "perzyna"\nsigma_y = 1.0\nmu_star = "2*100"\n'
     scene = loads_text(text)
     assert scene.mesh.cell_type == "tetrahedron" and scene.mesh.diagonal is None

@@ -35,6 +35,9 @@ PERZYNA_KEYS = ("sigma_y", "mu_star", "yield_set")
 LINEAR_KEYS = ("a", "b")
 CONTACT_TYPES = ("none", "signorini", "normal_compliance")
 DEFAULT_MAX_DISTANCE = default("contact", "max_distance")
+#: The gap of a normal-compliance part that gives neither gap nor foundation surface (the
+#: foundation touches the face at the start); a Signorini part must give one or an obstacle.
+COMPLIANT_GAP = 0
 
 
 def read_law(top: Table, dim: int | None) -> LawSpec:
@@ -270,8 +273,8 @@ def _rotation(t: Table, dim: int | None) -> ObstacleRotation | None:
 
 
 def _gap(t: Table, dim: int | None) -> Expression | None:
-    """The initial gap g(x) (default 0); a constant gap must be ≥ 0."""
-    gap = t.expr("gap", ("x",), dim, default("contact", "gap"))
+    """The initial gap g(x) (normal compliance: default 0); a constant gap must be ≥ 0."""
+    gap = t.expr("gap", ("x",), dim, COMPLIANT_GAP)
     if gap is None or not gap.is_constant:
         return gap
     value = constant_value(t.report, t.at("gap"), gap)
