@@ -48,7 +48,7 @@ def test_a_3d_bar_relaxes_to_the_von_mises_yield_stress_by_default(
     out = shared_tmp_path / name
     assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0
     printed = capsys.readouterr().out
-    assert _end_force(out) == pytest.approx(expected, rel=1e-6)
+    assert _end_force(out) == pytest.approx(expected, rel=1e-9)  # measured 8e-14
     if ROOT:
         assert printed.splitlines()[0] == (f"relaxing_bar: 3-D, law perzyna (yield set {shown}), "
                                            "displacement P1 (default)")
