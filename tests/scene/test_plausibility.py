@@ -96,7 +96,8 @@ def test_overridden_keys_are_warned_at_their_override():
 def test_bundled_scenes(name):
     """The paper's §4.2.2 foundation (μ = 100 under a block of E = 1e8, σ_Y = √10) is warned:
     it carries σ_Y only after sinking 316, 53 times the block's size (in the paper's test it
-    carries next to nothing). No other bundled scene is."""
+    carries 0.0041 of the load 10 at T, tests/reference/bundled_summaries.json). No other
+    bundled scene is."""
     found = warnings(load(bundled()[name]))
     if name == "normal_compliance_2d":
         (problem,) = found
