@@ -1,12 +1,19 @@
 # SPDX-License-Identifier: MIT
 """Command line: ``python3 -m vpcontact run|validate|list|show`` (also the ``vpcontact`` script).
 
-* ``run [SCENE] [--out DIR] [--petsc-options KEY=VALUE ...] [-v]``: simulate a scene (default:
-  ``indentation_relaxation``, a cylinder pushed into a viscoplastic block) and write into DIR
-  the XDMF series, ``contact.csv``, ``reactions.csv``, ``summary.json`` and PNG figures the
-  scene asks for. ``-v`` also shows the form compiler's messages.
+* ``run [SCENE] [--out DIR] [--set KEY=VALUE ...] [--petsc-options KEY=VALUE ...] [-v]``:
+  simulate a scene (default: ``indentation_relaxation``, a cylinder pushed into a viscoplastic
+  block) and write into DIR the XDMF series, ``contact.csv``, ``reactions.csv``,
+  ``summary.json`` and PNG figures the scene asks for. Its first line names the law, yield set,
+  plane and formulation taken (:func:`vpcontact.scene.describe.choices`). ``-v`` also shows the
+  form compiler's messages.
 * ``validate SCENE``: check a scene without running it (the mesh-dependent checks included).
 * ``list``: the bundled scenes. ``show SCENE``: the scene with every default filled in.
+* ``--set KEY=VALUE`` (``run``, ``validate``, ``show``; repeatable): set a scene key over the
+  file's, e.g. ``--set time.k=0.01 --set 'mesh.cells=[32, 16]'`` (:mod:`vpcontact.scene.overrides`);
+  checked like the file's keys, and recorded in ``summary.json``.
+* ``validate`` and ``run`` print warnings for data a small-strain model cannot mean (mixed
+  units, an unreachable compliance, a huge step count: :mod:`vpcontact.scene.plausibility`).
 * ``study convergence SCENE``: error against h, k or both, observed orders and error constants;
   ``study cost SCENE``: error against wall time and dofs × steps for every combination of mesh,
   step, degree and scheme, with the Pareto front (:mod:`vpcontact.studies`). Both write CSV,
@@ -136,6 +143,7 @@ def _parser() -> argparse.ArgumentParser:
                          help="simulate a scene (default: indentation_relaxation)")
     run.add_argument("scene", nargs="?", default=None, help="bundled scene name or TOML file")
     run.add_argument("--out", help="output folder (default: output/<scene name>)")
+    _add_set(run)
     run.add_argument("--petsc-options", nargs="+", default=[], metavar="KEY=VALUE",
                      help="PETSc options for the step solver, e.g. snes_rtol=1e-9")
     run.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -146,6 +154,7 @@ def _parser() -> argparse.ArgumentParser:
                              ("show", _show, "print the scene with all defaults filled in")):
         p = sub.add_parser(name, help=text, parents=[verbose])
         p.add_argument("scene", help="bundled scene name or TOML file")
+        _add_set(p)
         p.set_defaults(func=func)
     sub.add_parser("list", help="list the bundled scenes").set_defaults(func=_list)
     study = sub.add_parser("study", help="convergence and work-precision studies of a scene")
@@ -186,6 +195,14 @@ def _parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _add_set(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--set", dest="overrides", action="append", default=[],
+                        metavar="KEY=VALUE",
+                        help="set a scene key over the file's (repeatable), e.g. time.k=0.01, "
+                             "law.mu_star=50, 'mesh.cells=[32,16]', material.plane=strain; "
+                             "the value is read as TOML (a bare word as a string)")
+
+
 def exit_status(signal_name: str) -> int:
     """128 + the signal's number: 130 for SIGINT, 143 for SIGTERM."""
     import signal
@@ -197,9 +214,26 @@ def _error(comm, message: str) -> None:
         print(f"error: {message}", file=sys.stderr, flush=True)
 
 
-def _load(name: Optional[str]):
+def _load(name: Optional[str], overrides=()):
     from vpcontact import scene as scenes
-    return scenes.load(scenes.resolve(name or scenes.DEFAULT_SCENE))
+    return scenes.load(scenes.resolve(name or scenes.DEFAULT_SCENE), overrides)
+
+
+def _warn(scene, model, comm) -> None:
+    """Print what the scene's data say against a small-strain model (on rank 0; the size of
+    the body from the built mesh, Gmsh meshes included; collective)."""
+    from vpcontact.model.extent import mesh_extent
+    from vpcontact.scene.plausibility import warnings
+    found = warnings(scene, mesh_extent(model.problem.mesh))
+    if comm.rank == 0:
+        for problem in found:
+            print(f"warning: {problem.format(str(scene.path))}", file=sys.stderr, flush=True)
+
+
+def _first_line(scene) -> str:
+    """``name: 2-D, law perzyna (yield set von_mises, default), plane strain (default), …``"""
+    from vpcontact.scene.describe import choices
+    return f"{scene.name}: {scene.dim}-D, {choices(scene)}"
 
 
 def _list(args, comm) -> int:
@@ -212,7 +246,7 @@ def _list(args, comm) -> int:
 
 
 def _show(args, comm) -> int:
-    text = _load(args.scene).to_toml()
+    text = _load(args.scene, args.overrides).to_toml()
     if comm.rank == 0:
         print(text, end="")
     return 0
@@ -220,12 +254,14 @@ def _show(args, comm) -> int:
 
 def _validate(args, comm) -> int:
     from vpcontact.scene.builder import build
-    scene = _load(args.scene)
+    from vpcontact.scene.describe import choices
+    scene = _load(args.scene, args.overrides)
     model = build(scene, comm)  # mesh-level checks: empty or overlapping parts, tags, points
+    _warn(scene, model, comm)
     model.problem.solver.destroy()
     if comm.rank == 0:
         print(f"{scene.path}: valid ({scene.dim}-D, {len(scene.boundaries)} boundary parts, "
-              f"law {scene.law.type}, contact {_contact_summary(scene)})")
+              f"{choices(scene)}, contact {_contact_summary(scene)})")
     return 0
 
 
@@ -267,7 +303,7 @@ def _run(args, comm) -> int:
     from vpcontact.output.session import Session
     from vpcontact.progress import ProgressBar
     from vpcontact.scene.builder import build
-    scene = _load(args.scene)
+    scene = _load(args.scene, args.overrides)
     extra = _petsc_options(args.petsc_options)
     if extra:
         import dataclasses
@@ -277,8 +313,11 @@ def _run(args, comm) -> int:
     out = _out_folder(args.out, Path("output") / scene.name)
     args.out_folder = out
     check_folder(out)
+    if comm.rank == 0:
+        print(_first_line(scene), flush=True)
     with StopRequest() as stop:  # SIGINT/SIGTERM: stop after the step in progress
         model = build(scene, comm)
+        _warn(scene, model, comm)
         lock = OutputLock(out, comm)
         try:
             bar = ProgressBar(scene.time.T) if not args.quiet and comm.rank == 0 else None

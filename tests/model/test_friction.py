@@ -1049,7 +1049,7 @@ def _cylinder_on_a_block(name, lower, upper, cells, box, motion, coefficient, ti
     moved by ``motion`` onto the part ``box`` of its top, Coulomb friction ``coefficient``;
     ``time`` holds the [time] entries (and any table after them)."""
     bottom = lower.strip("[]").split(",")[1].strip()
-    plane = 'plane = "strain"\n' if plane_strain else ""
+    plane = 'plane = "strain"\n' if plane_strain else 'plane = "stress"\n'
     return f"""
 name = "{name}"
 [mesh]

@@ -557,7 +557,7 @@ def test_explicit_scene_beyond_its_stability_limit_is_refused(shared_tmp_path, c
 
 def test_plane_strain_scene_runs_the_3d_law_in_the_plane(shared_tmp_path):
     path = _small("elastic_2d", shared_tmp_path, "[8, 2]", 1.0, 0.5)
-    text = path.read_text().replace("nu = 0.3", 'nu = 0.3\nplane = "strain"')
+    text = path.read_text().replace('plane = "stress"', 'plane = "strain"')
     write_shared(path, text)
     out = shared_tmp_path / "out"
     assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 0

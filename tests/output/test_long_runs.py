@@ -329,7 +329,7 @@ def test_ctrl_c_still_stops_cleanly_after_gmsh_read_a_mesh(tmp_path):
     (tmp_path / "scene.toml").write_text(
         'name = "cylinder"\n[mesh]\ntype = "gmsh"\nfile = "cylinder.msh"\ndim = 2\n'
         '[boundary.top]\nkind = "clamped"\ntag = 2\n[boundary.axis]\nkind = "symmetry"\ntag = 3\n'
-        '[material]\nE = 1.0\nnu = 0.3\n[time]\nT = 1.0\nk = 0.1\n')
+        '[material]\nE = 1.0\nnu = 0.3\nplane = "stress"\n[time]\nT = 1.0\nk = 0.1\n')
     script = tmp_path / "run.py"
     script.write_text(
         "import os, signal, sys\n"

@@ -285,6 +285,7 @@ class Session:
         solver = problem.solver
         summary = {
             "scene": {"name": scene.name, "path": str(scene.path), "sha256": scene.hash},
+            "overrides": dict(scene.overrides),  # the keys set by `run --set KEY=VALUE`
             "versions": _versions(),
             "mpi_ranks": self.comm.size,
             "completed": bool(record is not None and record.completed and error is None),

@@ -32,17 +32,19 @@ builder turns it into dolfinx objects) and can report located errors later throu
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import re
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
+from vpcontact.scene import overrides as cli_overrides
 from vpcontact.scene import write
 from vpcontact.scene.locate import Locator
 from vpcontact.scene.read import contact_key, read_scene
-from vpcontact.scene.schema import Problem, Report, SceneError
+from vpcontact.scene.schema import OVERRIDE, Problem, Report, SceneError
 from vpcontact.scene.specs import (BoundaryPart, BoxSelector, ContactSpec, InitialSpec, LawSpec,
                                    LoadSpec, MaterialSpec, MeshSpec, OutputSpec, PlaneSelector,
                                    PointLoad, SolverSpec, TimeSpec)
@@ -87,7 +89,12 @@ class Scene:
         degree: polynomial degree of the displacement.
         solver: predictor and PETSc options.
         output: what to write.
-        hash: sha256 (hex) of the file's bytes.
+        hash: sha256 (hex) of the file's bytes (followed by the overrides, when any).
+        overrides: the keys set on the command line (``--set``), path → value, in the order
+            given (``summary.json`` records them).
+        defaulted: the key paths of the model choices left to their defaults (``law.type``,
+            ``law.yield_set``, ``material.plane``, ``discretization.formulation``), which
+            ``show`` and the run's first line mark (:func:`vpcontact.scene.describe.choices`).
     """
 
     name: str
@@ -109,6 +116,8 @@ class Scene:
     contact_array: bool = False
     hash: str = field(default="", compare=False)
     locator: Locator | None = field(default=None, compare=False, repr=False)
+    overrides: dict[str, Any] = field(default_factory=dict, compare=False)
+    defaulted: frozenset[str] = field(default=frozenset(), compare=False)
 
     @property
     def contact(self) -> ContactSpec:
@@ -128,22 +137,31 @@ class Scene:
         raise KeyError(boundary)
 
     def where(self, path: str) -> str:
-        """``"file:line"`` of a key path such as ``"boundary.bottom"`` (``"file"`` if unknown)."""
+        """``"file:line"`` of a key path such as ``"boundary.bottom"`` (``"file"`` if unknown;
+        ``"--set path"`` for a key set on the command line)."""
+        report = self._report()
+        origin = report.origin(path)
+        if origin is not None:
+            return f"{OVERRIDE} {origin}"
         line = self.locator.line(path) if self.locator is not None else None
         return str(self.path) if line is None else f"{self.path}:{line}"
+
+    def _report(self) -> Report:
+        """An empty report that locates key paths in this scene's file and overrides."""
+        return Report(str(self.path), self.locator, tuple(self.overrides))
 
     def error(self, path: str, message: str) -> SceneError:
         """A :class:`SceneError` located at a key path, for problems found after loading.
 
         Example: ``raise scene.error("boundary.bottom", "selects no facets")``.
         """
-        report = Report(str(self.path), self.locator)
+        report = self._report()
         report.add(path, message)
         return report.error()
 
     def errors(self, problems: dict[str, str]) -> SceneError:
         """:meth:`error` for several problems at once (key path → message), each located."""
-        report = Report(str(self.path), self.locator)
+        report = self._report()
         for path, message in problems.items():
             report.add(path, message)
         return report.error()
@@ -153,8 +171,13 @@ class Scene:
         return write.dump(self)
 
 
-def load(path: str | os.PathLike) -> Scene:
+def load(path: str | os.PathLike, overrides: Sequence[str] = ()) -> Scene:
     """Read, validate and resolve a scene file.
+
+    Args:
+        path: the scene file.
+        overrides: ``KEY=VALUE`` texts that set scene keys over the file's
+            (:mod:`vpcontact.scene.overrides`), checked and located like the file's own.
 
     Raises:
         SceneError: the file cannot be read (missing, larger than :data:`MAX_BYTES`, not UTF-8)
@@ -175,27 +198,29 @@ def load(path: str | os.PathLike) -> Scene:
         line = data[:err.start].count(b"\n") + 1
         raise SceneError([Problem("", line, f"not UTF-8 text (byte {err.start})")],
                          str(path)) from None
-    return _resolve_text(text, data, path)
+    return _resolve_text(text, data, path, overrides)
 
 
-def loads_text(text: str, path: str | os.PathLike = "<string>") -> Scene:
+def loads_text(text: str, path: str | os.PathLike = "<string>",
+               overrides: Sequence[str] = ()) -> Scene:
     """Validate and resolve a scene given as TOML text.
 
     Args:
         text: the TOML source.
         path: shown in messages; relative Gmsh files are found next to it.
+        overrides: ``KEY=VALUE`` texts, as for :func:`load`.
 
     Raises:
         SceneError: listing every problem found.
     """
-    return _resolve_text(text, text.encode("utf-8", "surrogatepass"), Path(path))
+    return _resolve_text(text, text.encode("utf-8", "surrogatepass"), Path(path), overrides)
 
 
 def _file_error(path: Path, message: str) -> SceneError:
     return SceneError([Problem("", None, message)], str(path))
 
 
-def _resolve_text(text: str, data: bytes, path: Path) -> Scene:
+def _resolve_text(text: str, data: bytes, path: Path, overrides: Sequence[str] = ()) -> Scene:
     file = str(path)
     if len(data) > MAX_BYTES:
         raise _file_error(path, f"scene text larger than {MAX_BYTES} bytes")
@@ -206,11 +231,19 @@ def _resolve_text(text: str, data: bytes, path: Path) -> Scene:
     except RecursionError:
         raise _file_error(path, "TOML syntax error: values nested too deeply") from None
     locator = Locator(text)
-    report = Report(file, locator)
+    parsed = [cli_overrides.parse(o) for o in overrides]
+    given = {o.path: o.value for o in parsed if isinstance(o, cli_overrides.Override)}
+    report = Report(file, locator, tuple(given))
+    report.problems += [o for o in parsed if isinstance(o, Problem)]
+    report.problems += cli_overrides.apply(table, [o for o in parsed
+                                                   if isinstance(o, cli_overrides.Override)])
     fields = read_scene(table, report, path.parent, _default_name(path))
     if report.problems:
         raise report.error()
-    return Scene(**fields, path=path, hash=hashlib.sha256(data).hexdigest(), locator=locator)
+    if given:  # the run is the file and its overrides: a checkpoint of another is not resumed
+        data += b"\n" + OVERRIDE.encode() + b" " + json.dumps(given, default=str).encode()
+    return Scene(**fields, path=path, hash=hashlib.sha256(data).hexdigest(), locator=locator,
+                 overrides=given)
 
 
 def _syntax_problem(message: str, text: str) -> Problem:

@@ -163,8 +163,10 @@ TABLES: dict[str, tuple[Key, ...]] = {
         _k("E", "number", REQUIRED, "stress", "Young's modulus, > 0"),
         _k("nu", "number", REQUIRED, "—",
            "Poisson's ratio in (−1, 0.5] (0.5 with the mixed formulation only); not in 1-D"),
-        _k("plane", "string", "stress", "—", "2-D model: plane stress or plane strain",
-           ("stress", "strain")),
+        _k("plane", "string", "strain", "—",
+           "2-D model: plane strain (the default: a slice of a long body, as contact problems "
+           "usually are; Perzyna's law then runs the mixed P2–P1 formulation) or plane stress "
+           "(a thin plate)", ("stress", "strain")),
     ),
     "law": (
         _k("type", "string", "elastic", "—", "G = 0, Perzyna's law, or G = aσ + bε",
@@ -177,9 +179,10 @@ TABLES: dict[str, tuple[Key, ...]] = {
            "Perzyna: the yield stress σ_Y (> 0)"),
         _k("mu_star", "constant expression", REQUIRED, "stress·time",
            "Perzyna: the viscosity μ* (> 0)"),
-        _k("yield_set", "string", Varies("paper in 3-D; von_mises in 1-D and 2-D (the only one)",
-                                         ("paper", None)), "—",
-           "Perzyna: the yield set K", ("paper", "von_mises")),
+        _k("yield_set", "string", "von_mises", "—",
+           "Perzyna: the yield set K, von Mises (|σ| ≤ σ_Y uniaxially) in every dimension unless "
+           "a 3-D scene names the paper's printed set (uniaxial yield stress σ_Y/√2)",
+           ("paper", "von_mises")),
         _k("a", "constant expression", REQUIRED, "1/time", "linear law: a in G = aσ + bε"),
         _k("b", "constant expression", REQUIRED, "stress/time", "linear law: b in G = aσ + bε"),
     ),
@@ -187,8 +190,9 @@ TABLES: dict[str, tuple[Key, ...]] = {
         _k("type", "string", REQUIRED, "—", "rigid (u_ν ≤ g) or deformable foundation",
            ("none", "signorini", "normal_compliance")),
         _k("boundary", "string", REQUIRED, "—", "the boundary part (of kind contact) it acts on"),
-        _k("gap", "expression of x", 0, "length", "initial gap g(x) along the body's normal, ≥ 0 "
-           "(or an obstacle)"),
+        _k("gap", "expression of x", Varies("normal compliance: 0; Signorini: required unless "
+                                             "an obstacle is given", (0,)), "length",
+           "initial gap g(x) along the body's normal, ≥ 0 (or an obstacle)"),
         _k("obstacle", "expression of x (and t) or table", None, "length",
            "the obstacle {φ ≤ 0} (a level set φ, > 0 on the body's side) or a built-in shape",
            shown="none: a gap"),
@@ -201,8 +205,9 @@ TABLES: dict[str, tuple[Key, ...]] = {
            shown="none"),
         _k("max_distance", "number", 1e3, "length",
            "longest ray searched for the obstacle from a contact node"),
-        _k("mu", "number", REQUIRED, "length/stress (α = 1)",
-           "normal compliance: deformability μ of the foundation, > 0"),
+        _k("mu", "number", REQUIRED, "length^α/stress",
+           "normal compliance: the foundation's compliance μ (1/stiffness, not a friction "
+           "coefficient), > 0: a pressure p needs the penetration (μ p)^(1/α)"),
         _k("alpha", "number", 1.0, "—", "normal compliance: exponent α in (0, 1]"),
         _k("friction", "table", None, "—", "Coulomb or Tresca friction", shown="frictionless"),
         _k("normals", "string", "body", "—",

@@ -35,6 +35,9 @@ PERZYNA_KEYS = ("sigma_y", "mu_star", "yield_set")
 LINEAR_KEYS = ("a", "b")
 CONTACT_TYPES = ("none", "signorini", "normal_compliance")
 DEFAULT_MAX_DISTANCE = default("contact", "max_distance")
+#: The gap of a normal-compliance part that gives neither gap nor foundation surface (the
+#: foundation touches the face at the start); a Signorini part must give one or an obstacle.
+COMPLIANT_GAP = 0
 
 
 def read_law(top: Table, dim: int | None) -> LawSpec:
@@ -58,12 +61,15 @@ def read_law(top: Table, dim: int | None) -> LawSpec:
 
 
 def _yield_set(t: Table, dim: int | None) -> str | None:
-    """3-D: the paper's printed set (default) or von Mises; 1-D and 2-D: von Mises only."""
+    """Von Mises by default in every dimension (a default must not change meaning with the
+    dimension); 3-D scenes may name the paper's printed set instead, whose uniaxial yield
+    stress is σ_Y/√2."""
     if dim == 3 or dim is None:
-        return t.choice("yield_set", ("paper", "von_mises"), "paper" if dim == 3 else None)
+        return t.choice("yield_set", ("paper", "von_mises"), default("law", "yield_set"))
     if t.data.get("yield_set", "von_mises") != "von_mises":
         t.add("yield_set", "only 'von_mises' is available in 1-D and 2-D (|σ| ≤ σ_Y in 1-D, "
-                           "plane-stress von Mises in 2-D); 'paper' is a 3-D option")
+                           "von Mises in plane stress and plane strain); 'paper' is a 3-D "
+                           "option")
         return None
     return "von_mises"
 
@@ -168,7 +174,13 @@ def _read_contact(t: Table, dim: int | None) -> ContactSpec | None:
     t.forbid("rotation", "only with an obstacle")
     t.forbid("force", "only with an obstacle")
     if kind == "signorini":
-        return ContactSpec(kind, boundary, gap=_gap(t, dim), friction=friction)
+        if not t.has("gap"):
+            t.report.add(t.path, "a Signorini part needs a gap or an obstacle: without either "
+                                 "it has no foundation to touch; write gap = 0 for a rigid "
+                                 "foundation that touches this face at the start, or give "
+                                 "the obstacle")
+        gap = _gap(t, dim) if t.has("gap") else None
+        return ContactSpec(kind, boundary, gap=gap, friction=friction)
     return ContactSpec(kind, boundary, gap=_gap(t, dim), mu=t.number("mu", check=greater(0)),
                        alpha=t.number("alpha", default("contact", "alpha"),
                                       check=between(0.0, 1.0, "(]")),
@@ -261,8 +273,8 @@ def _rotation(t: Table, dim: int | None) -> ObstacleRotation | None:
 
 
 def _gap(t: Table, dim: int | None) -> Expression | None:
-    """The initial gap g(x) (default 0); a constant gap must be ≥ 0."""
-    gap = t.expr("gap", ("x",), dim, default("contact", "gap"))
+    """The initial gap g(x) (normal compliance: default 0); a constant gap must be ≥ 0."""
+    gap = t.expr("gap", ("x",), dim, COMPLIANT_GAP)
     if gap is None or not gap.is_constant:
         return gap
     value = constant_value(t.report, t.at("gap"), gap)

@@ -80,7 +80,26 @@ def read_scene(data: dict, report: Report, base_dir: Path, default_name: str) ->
         **read_discretization(top, dim, material, law),
         "solver": read_solver(top),
         "output": read_output(top, contacts),
+        "defaulted": defaulted(data, dim, law),
     }
+
+
+#: The model choices whose defaults ``show`` and the run's first line mark, by key path.
+CHOICES = ("law.type", "law.yield_set", "material.plane", "discretization.formulation")
+
+
+def defaulted(data: dict, dim: int | None, law: LawSpec) -> frozenset[str]:
+    """The key paths of :data:`CHOICES` that the scene leaves to their defaults (of those that
+    apply to it: the yield set to Perzyna's law, the plane to 2-D scenes);
+    ``formulation = "auto"`` counts as left to the default."""
+    def given(table: str, key: str) -> Any:
+        section = data.get(table)
+        return section.get(key) if isinstance(section, dict) else None
+
+    applies = {"law.type": True, "law.yield_set": law.type == "perzyna",
+               "material.plane": dim == 2, "discretization.formulation": True}
+    return frozenset(path for path in CHOICES if applies[path]
+                     and given(*path.split(".")) in (None, "auto"))
 
 
 # -- mesh -----------------------------------------------------------------------------------

@@ -20,7 +20,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 from vpcontact.errors import InputError
 from vpcontact.scene.expressions import Expression, ExpressionError, parse
-from vpcontact.scene.locate import Locator, join
+from vpcontact.scene.locate import Locator, join, split_path
 
 __all__ = ["REQUIRED", "Problem", "Report", "SceneError", "Table", "at_least", "between",
            "constant_value", "fmt", "greater", "type_name", "unknown_key"]
@@ -30,6 +30,9 @@ class _Required:
     def __repr__(self) -> str:
         return "REQUIRED"
 
+
+#: How the command line's scene-key overrides are written (``--set law.mu_star=50``).
+OVERRIDE = "--set"
 
 #: Default meaning "the key must be given".
 REQUIRED: Any = _Required()
@@ -45,16 +48,26 @@ class Problem:
         path: key path such as ``"material.E"`` or ``"loads.point[0].force"`` ("" for the file).
         line: 1-based line in the scene file, or ``None`` if unknown.
         message: what is wrong, e.g. ``"must be > 0, got -1"``.
+        origin: the command-line override (``--set``) the problem comes from, as its key path
+            (or its text when it could not be read), instead of a line of the file; else
+            ``None``.
     """
 
     path: str
     line: int | None
     message: str
+    origin: str | None = None
 
     def format(self, file: str) -> str:
-        """``file:line: path: message`` (parts that are unknown are left out)."""
-        where = file if self.line is None else f"{file}:{self.line}"
-        return f"{where}: {self.path}: {self.message}" if self.path else f"{where}: {self.message}"
+        """``file:line: path: message`` (parts that are unknown are left out); for a problem of
+        an override, ``--set path: message``."""
+        if self.origin is not None:
+            where = f"{OVERRIDE} {self.origin}"
+            shown = self.path if self.path and self.path != self.origin else ""
+        else:
+            where = file if self.line is None else f"{file}:{self.line}"
+            shown = self.path
+        return f"{where}: {shown}: {self.message}" if shown else f"{where}: {self.message}"
 
 
 class SceneError(InputError):
@@ -77,17 +90,46 @@ class Report:
     Args:
         file: the file name shown in messages.
         locator: line finder of the file's text (``None`` if there is no text).
+        overridden: the key paths set on the command line (``--set``); a problem at or under
+            one of them is located at the override, not in the file.
     """
 
-    def __init__(self, file: str, locator: Locator | None = None):
+    def __init__(self, file: str, locator: Locator | None = None,
+                 overridden: Sequence[str] = ()):
         self.file = file
         self.locator = locator
+        self.overridden = tuple(overridden)
         self.problems: list[Problem] = []
 
     def add(self, path: str, message: str) -> None:
         """Record a problem at ``path``."""
-        line = self.locator.line(path) if self.locator is not None and path else None
-        self.problems.append(Problem(path, line, message))
+        origin = self.origin(path)
+        line = (self.locator.line(path) if self.locator is not None and path and origin is None
+                else None)
+        self.problems.append(Problem(path, line, message, origin))
+
+    def origin(self, path: str) -> str | None:
+        """The override that ``path`` belongs to: one set at ``path`` or above it, or one that
+        created the table ``path`` lies in (a table the file does not have); else ``None``."""
+        if not self.overridden:
+            return None
+        for key in self.overridden:
+            if _within(path, key):
+                return key
+        created = self._first_missing(path)
+        for key in self.overridden:
+            if created is not None and _within(key, created):
+                return key
+        return None
+
+    def _first_missing(self, path: str) -> str | None:
+        """The shortest ancestor-or-self of ``path`` that the file does not have."""
+        prefix = ""
+        for token in split_path(path):
+            prefix = prefix + token if token.startswith("[") or not prefix else f"{prefix}.{token}"
+            if self.locator is None or self.locator.exact(prefix) is None:
+                return prefix
+        return None
 
     def error(self) -> SceneError:
         """A :class:`SceneError` holding the problems collected so far."""
@@ -95,6 +137,11 @@ class Report:
 
 
 # -- messages -------------------------------------------------------------------------------
+
+def _within(path: str, ancestor: str) -> bool:
+    """Whether ``path`` is ``ancestor`` or lies below it (``a.b``, ``a[0]`` below ``a``)."""
+    return path == ancestor or path.startswith((ancestor + ".", ancestor + "["))
+
 
 def fmt(value: Any) -> str:
     """A number or value as written in messages (``-1.0`` -> ``-1``)."""

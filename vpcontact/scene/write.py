@@ -13,6 +13,7 @@ import tomllib
 from pathlib import Path
 from typing import Any
 
+from vpcontact.scene.describe import MU_MEANING, choices
 from vpcontact.scene.expressions import Expression, ExpressionError, parse
 from vpcontact.scene.specs import BoxSelector, ObstacleRotation, ObstacleShape, PlaneSelector
 
@@ -87,16 +88,36 @@ def value(item: Any) -> str:
     raise TypeError(f"cannot write {type(item).__name__} as TOML")
 
 
-def _table(header: str, entries: dict[str, Any]) -> list[str]:
+def _table(header: str, entries: dict[str, Any], notes: dict[str, str] | None = None
+           ) -> list[str]:
+    """The lines of one table; ``notes`` are comments written after their keys' values."""
+    notes = notes or {}
     lines = [f"[{header}]"] if header else []
-    lines += [f"{key(k)} = {value(v)}" for k, v in entries.items() if v is not None]
+    lines += [f"{key(k)} = {value(v)}" + (f"  # {notes[k]}" if k in notes else "")
+              for k, v in entries.items() if v is not None]
+    return lines + [""]
+
+
+def _defaults(scene: Any, table: str) -> dict[str, str]:
+    """``{key: "default"}`` for the model choices of ``table`` the scene left to defaults."""
+    notes = {"formulation": 'default: "auto" chose it'}
+    return {path.split(".")[1]: notes.get(path.split(".")[1], "default")
+            for path in scene.defaulted if path.startswith(table + ".")}
+
+
+def _header(scene: Any) -> list[str]:
+    lines = [f"# Resolved scene {scene.name!r} (all defaults written out).",
+             f"# {choices(scene)}"]
+    if scene.overrides:
+        lines.append("# with " + " ".join(f"--set {path}={value(v)}"
+                                          for path, v in scene.overrides.items()))
     return lines + [""]
 
 
 def dump(scene: Any) -> str:
     """The resolved ``scene`` (a :class:`vpcontact.scene.Scene`) as TOML text."""
     mesh, law = scene.mesh, scene.law
-    blocks = [f"# Resolved scene {scene.name!r} (all defaults written out).", ""]
+    blocks = _header(scene)
     blocks += _table("", {"name": scene.name, "description": scene.description})
     if mesh.builtin:
         blocks += _table("mesh", {"type": mesh.type, "lower": mesh.lower, "upper": mesh.upper,
@@ -112,10 +133,11 @@ def dump(scene: Any) -> str:
     for point in scene.loads.point:
         blocks += ["[[loads.point]]"] + _table("", {"at": point.at, "force": point.force})
     material = scene.material
-    blocks += _table("material", {"E": material.E, "nu": material.nu, "plane": material.plane})
+    blocks += _table("material", {"E": material.E, "nu": material.nu, "plane": material.plane},
+                     _defaults(scene, "material"))
     blocks += _table("law", {"type": law.type, "scheme": law.scheme, "sigma_y": law.sigma_y,
                              "mu_star": law.mu_star, "yield_set": law.yield_set, "a": law.a,
-                             "b": law.b})
+                             "b": law.b}, _defaults(scene, "law"))
     for contact in scene.contacts:
         entries = {
             "type": contact.type, "boundary": contact.boundary, "gap": contact.gap,
@@ -128,15 +150,17 @@ def dump(scene: Any) -> str:
                 k: v for k, v in (("type", contact.friction.type),
                                   ("coefficient", contact.friction.coefficient),
                                   ("threshold", contact.friction.threshold)) if v is not None}}
+        notes = {"mu": MU_MEANING}
         if scene.contact_array:
-            blocks += ["[[contact]]"] + _table("", entries)
+            blocks += ["[[contact]]"] + _table("", entries, notes)
         else:
-            blocks += _table("contact", entries)
+            blocks += _table("contact", entries, notes)
     blocks += _table("initial", {"u0": scene.initial.u0, "sigma0": scene.initial.sigma0})
     time = scene.time
     blocks += _table("time", {"T": time.T, "k": time.k, "max_cuts": time.max_cuts,
                                      "scheme": time.scheme, "tolerance": time.tolerance})
-    blocks += _table("discretization", {"formulation": scene.formulation, "degree": scene.degree})
+    blocks += _table("discretization", {"formulation": scene.formulation, "degree": scene.degree},
+                     _defaults(scene, "discretization"))
     blocks += _table("solver", {"predictor": scene.solver.predictor,
                                 "linear": scene.solver.linear,
                                 "petsc_options": scene.solver.petsc_options})
