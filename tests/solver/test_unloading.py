@@ -134,3 +134,29 @@ def test_a_load_through_zero_to_a_reversed_value_on_frictional_contacts(shared_t
     assert np.allclose(forces["contact_x"], 0.0, atol=1e-7)
     summary = json.loads((out / "summary.json").read_text())
     assert summary["completed"] and summary["stabilization"]["unloaded_at"] == 0.5
+
+
+@pytest.mark.parametrize("tangential, friction, held", [
+    ('"0.5 - t"', COULOMB, True),   # through zero to -0.1 at t = 0.6: friction holds it
+    ('"2 - t"', COULOMB, False),    # beyond the friction (0.3 × 5): it slides off
+])
+def test_a_tangential_load_on_a_frictional_floor(scene_text, shared_tmp_path, capsys, tangential,
+                                                 friction, held):
+    """A block pressed onto a floor by 5 and pushed along it: within the friction (|t_x| ≤ 1.5)
+    the floor holds it, the push passing through zero to a reversed value (refused by
+    `validate` before: "no contact part can resist it … contact is frictionless"); beyond the
+    friction there is no equilibrium, refused at that step, located."""
+    text = _on_floor(scene_text, f"[{tangential}, -5]", 0.6, k=0.1, friction=friction)
+    code, out = _run(shared_tmp_path, "pushed", text)
+    err = capsys.readouterr().err
+    if held:
+        assert code == 0, err
+        forces = _rows(out / "reactions.csv")
+        t = forces["t"][1:]
+        assert np.allclose(forces["contact_x"][1:], t - 0.5, atol=1e-7), forces["contact_x"]
+        assert np.allclose(forces["contact_y"][1:], 5.0, rtol=1e-8)
+        return
+    assert code == 2
+    if ROOT0:
+        assert re.search(r"pushed\.toml:\d+: boundary: no equilibrium at t = 0\.1: nothing holds "
+                         r"the body along its translation along x .*beyond its friction", err), err

@@ -72,6 +72,11 @@ class SignoriniPart:
         """With friction the outputs split its force into normal and tangential parts."""
         return self.friction is not None
 
+    @property
+    def resists_sliding(self) -> bool:
+        """With friction it resists the body's motion along its face where it presses."""
+        return self.friction is not None
+
     #: its force is the residual left at its nodes (the bound's multiplier)
     reports_law_force = False
 

@@ -13,8 +13,8 @@ solutions. They are found with a weak spring that ties the body to its last acce
 1e-8 of the elastic forces of the same displacement) but enough to remove the singularity. What
 it carries is measured after every step — along each free rigid motion m, the generalised force
 ∫ ε (u − u_{n−1}) · m dx — and reported (summary.json). Above :data:`NO_EQUILIBRIUM` of the
-forces on the body the body is not held (it lifts off, or is pushed along a frictionless face)
-and the step is refused.
+forces on the body the body is not held (it lifts off, or is pushed along a frictionless face or
+beyond its friction) and the step is refused.
 
 Those forces are measured by a scale that does not vanish when the body is unloaded:
 
@@ -32,7 +32,8 @@ contacts that hold it, so they no longer fix its rigid motions; it is kept where
 spring), and the run says so once (:attr:`HeldByContacts.warnings`, summary.json).
 
 Before the run, a scene whose loads push the body along a free motion that no contact part can
-resist (every contact normal perpendicular to it) is refused outright (:meth:`check`).
+resist (every contact normal perpendicular to it, and no friction) is refused outright
+(:func:`check_held`).
 """
 
 from __future__ import annotations
@@ -134,8 +135,9 @@ class HeldByContacts:
             raise InputError(
                 f"no equilibrium at t = {time:.6g}: nothing holds the body along its {which} "
                 f"(no Dirichlet part removes it, and the contacts do not resist it: the body "
-                f"lifts off or is pushed along a frictionless face; the stabilising spring "
-                f"carries {carried / scale:.2g} of the forces on the body). Hold it with a "
+                f"lifts off, or is pushed along a face that cannot hold it, frictionless or "
+                f"beyond its friction; the stabilising spring carries {carried / scale:.2g} of "
+                f"the forces on the body). Hold it with a "
                 "Dirichlet part (clamped, a prescribed displacement or a symmetry plane)",
                 key="boundary")
         self.largest_ratio = max(self.largest_ratio, carried / scale)
@@ -189,7 +191,8 @@ def check_held(mesh, free: Sequence[tuple[str, np.ndarray]], loads_along, contac
                facet_tags) -> None:
     """Refuse (InputError at ``boundary``) a free rigid motion along which the loads push
     (``loads_along(coefficients)``: (their generalised force on the motion, its scale)) while
-    no contact part can resist it (m · ν = 0 on every contact face)."""
+    no contact part can resist it (m · ν = 0 on every contact face, and none resists sliding:
+    a frictional face pressed by the loads holds the body along itself)."""
     comm = mesh.comm
     x = mesh.geometry.x
     lo = np.min(comm.allgather(x.min(axis=0)), axis=0)
@@ -204,8 +207,10 @@ def check_held(mesh, free: Sequence[tuple[str, np.ndarray]], loads_along, contac
         area = 0.0
         for part in contacts:
             tag = part.law.tag
-            resisted += comm.allreduce(fem.assemble_scalar(fem.form(ufl.dot(m, n) ** 2
-                                                                    * ds(tag))), op=MPI.SUM)
+            # the normal part of m, and with friction (a part that resists sliding) all of it
+            along = ufl.dot(m, m) if part.resists_sliding else ufl.dot(m, n) ** 2
+            resisted += comm.allreduce(fem.assemble_scalar(fem.form(along * ds(tag))),
+                                       op=MPI.SUM)
             area += comm.allreduce(fem.assemble_scalar(fem.form(ufl.dot(m, m) * ds(tag))),
                                    op=MPI.SUM)
         pushed, scale = loads_along(coefficients)
@@ -213,6 +218,6 @@ def check_held(mesh, free: Sequence[tuple[str, np.ndarray]], loads_along, contac
             raise InputError(
                 f"the body is not held along its {name}: no Dirichlet part removes that motion, "
                 "the loads push the body along it, and no contact part can resist it (every "
-                "contact face is parallel to it: contact is frictionless). Hold the body with a "
+                "contact face is parallel to it and frictionless). Hold the body with a "
                 "Dirichlet part (clamped, a prescribed displacement or a symmetry plane)",
                 key="boundary")
