@@ -160,3 +160,25 @@ def test_a_tangential_load_on_a_frictional_floor(scene_text, shared_tmp_path, ca
     if ROOT0:
         assert re.search(r"pushed\.toml:\d+: boundary: no equilibrium at t = 0\.1: nothing holds "
                          r"the body along its translation along x .*beyond its friction", err), err
+
+
+def test_a_checkpoint_keeps_the_held_anchor(scene_text):
+    """A run resumed from a checkpoint goes on exactly as without it: the spring's anchor
+    (u at the last step) and the force scale are in the checkpoint (the anchor was not, and a
+    resumed spring pulled the body back to u = 0)."""
+    from vpcontact.scene import loads_text
+    from vpcontact.scene.builder import build
+    from vpcontact.solver.stepping import StepControl, advance
+    scene = loads_text(_on_floor(scene_text, '[0, "-5*t*(2 - t)"]', 2.0))
+    whole, first = (build(scene, MPI.COMM_WORLD).problem for _ in range(2))
+    for problem in (whole, first):
+        list(advance(problem, 1.0, StepControl(0.5)))
+    scalars, arrays = first.checkpoint()
+    resumed = build(scene, MPI.COMM_WORLD).problem
+    resumed.restore(scalars, arrays)
+    assert np.array_equal(resumed.held.held.x.array, first.held.held.x.array)
+    assert resumed.held.state() == first.held.state() and first.held.last_applied > 0
+    for problem in (whole, resumed):
+        list(advance(problem, 2.0, StepControl(0.5)))
+    assert np.array_equal(resumed.u.x.array, whole.u.x.array)
+    assert resumed.held.unloaded_at == whole.held.unloaded_at == 2.0
