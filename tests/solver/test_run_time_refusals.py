@@ -36,12 +36,15 @@ def _refused(shared_tmp_path, capsys, name: str, text: str) -> tuple[str, dict]:
     return err, summary
 
 
-def test_an_indenter_pressed_through_the_body_by_a_force(scene_text, shared_tmp_path, capsys):
-    """A force far beyond what the clamped block can carry (1e5 on E = 1000) drives the
-    cylinder through it in the first step: the message locates the force and advises a smaller
-    force or a stiffer body, not contact.max_distance."""
+@pytest.mark.parametrize("force, steps", [("1e5", 0), ("1e4", 1)])
+def test_an_indenter_pressed_through_the_body_by_a_force(scene_text, shared_tmp_path, capsys,
+                                                         force, steps):
+    """A force far beyond what the clamped block can carry (E = 1000) drives the cylinder
+    through it: 1e5 in the first step's solve, 1e4 at the second step's prediction. The message
+    locates the force and advises a smaller force or a stiffer body, not contact.max_distance;
+    the steps before are kept."""
     text = scene_text("pressed_by_force").replace('force = [0, "-10*t"]',
-                                                  'force = [0, "-1e5*t"]')
+                                                  f'force = [0, "-{force}*t"]')
     err, summary = _refused(shared_tmp_path, capsys, "through", text)
     line = _line(text, "force =")
     if ROOT0:
@@ -49,7 +52,7 @@ def test_an_indenter_pressed_through_the_body_by_a_force(scene_text, shared_tmp_
                          r"force has passed through the body", err), err
         assert "A smaller force, a stiffer or stronger body" in err, err
         assert "max_distance" not in err, err
-    assert "contact.force" in summary["error"]
+    assert "contact.force" in summary["error"] and summary["steps"] == steps
 
 
 def test_an_indenter_driven_through_the_body_by_a_motion(scene_text, shared_tmp_path, capsys):

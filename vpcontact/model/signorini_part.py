@@ -217,17 +217,20 @@ class DrivenSignoriniPart(SignoriniPart):
         return gap_along_normal(shifted, cd.points, normals, max_distance=self.law.max_distance,
                                 signed=True, check_side=False, may_miss=cd.unreachable)
 
-    def _gaps_in_run(self, d: float) -> np.ndarray:
+    def _gaps_in_run(self, d: float, timed: bool = True) -> np.ndarray:
         """:meth:`_gaps_at` once the run has started (collective): a ray that met the obstacle
-        at t = 0 and misses it now means that the force has pushed it through the body."""
+        at t = 0 and misses it now means that the force has pushed it through the body (the
+        message gives the time if ``timed``; :func:`~vpcontact.model.contact.moved_parts` adds
+        it itself)."""
         error = None
         try:
             gaps = self._gaps_at(d)
         except InputError as err:
             error = err
         if self.comm.allreduce(error is not None, op=MPI.LOR):
+            when = f"at t = {self._time:.6g} " if timed else ""
             raise InputError(
-                f"at t = {self._time:.6g} the obstacle pressed by the force has passed through "
+                f"{when}the obstacle pressed by the force has passed through "
                 f"the body: the force moved it {abs(d):.4g} along "
                 f"{self._e[:self._bs].round(12).tolist()}, past contact nodes whose normal rays "
                 "met it at t = 0 (the body does not carry this force: it yields or is too thin "
@@ -261,10 +264,10 @@ class DrivenSignoriniPart(SignoriniPart):
         raise InputError("the obstacle cannot be brought into contact along the force's "
                          "direction", key="contact.force")
 
-    def _linearize(self, d: float) -> None:
+    def _linearize(self, d: float, timed: bool = True) -> None:
         """The gaps at d = d_p (the bounds: u_ν − (e · ν) δ ≤ g(d_p))."""
         self._predicted, self.increment = d, 0.0
-        self._nodes.gap = self._gaps_in_run(d)
+        self._nodes.gap = self._gaps_in_run(d, timed)
         self._bound = self._nodes.gap.copy()
 
     # -- the part's protocol ----------------------------------------------------------------
@@ -273,7 +276,7 @@ class DrivenSignoriniPart(SignoriniPart):
         (t1, d1), (t0, d0) = self._committed[-1], self._committed[0]
         d = d1 if t1 == t0 else d1 + (time - t1) / (t1 - t0) * (d1 - d0)
         self._time = time
-        self._linearize(d)
+        self._linearize(d, timed=False)
 
     def bound_gaps(self) -> np.ndarray:
         return self._bound
