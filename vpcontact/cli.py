@@ -187,8 +187,11 @@ def _parser() -> argparse.ArgumentParser:
         p.add_argument("--cells", type=int, nargs="+", help="coarsest mesh (default: the scene's)")
         p.add_argument("--k", type=float, help="coarsest step (default: the scene's)")
         p.add_argument("--T", type=float, help="final time (default: the scene's)")
-        p.add_argument("--exact", help="compare with an exact solution (paper_1d) instead of a "
-                                       "finer run")
+        p.add_argument("--exact", help="compare with an exact solution: paper_1d, or u(x, t) as "
+                                       "expressions of x[i] and t, one per component separated "
+                                       "by ';' (default: convergence estimates the order from "
+                                       "successive runs, Richardson; cost compares with a finer "
+                                       "run)")
         p.add_argument("--out", help="output folder (default: output/<scene name>/study)")
         p.add_argument("--quiet", action="store_true", help="no line per run")
     study.set_defaults(func=lambda args, comm: (study.print_help(), 2)[1])

@@ -60,18 +60,20 @@ def test_bdf2_second_order_in_k(tmp_path):
 
 
 @pytest.mark.slow
-def test_perzyna_2d_first_order_in_k_against_a_finer_run(tmp_path):
-    """§4.2.2 (point load, Perzyna, normal compliance) on a 6×3 mesh, refining k against a run
-    with k/8: implicit Euler is first order once the body flows (measured: 1.16, successive 1.10
-    and 1.22; the reference carries an error of its own, which steepens the fit)."""
+def test_perzyna_2d_first_order_in_k_by_richardson(tmp_path):
+    """§4.2.2 (point load, Perzyna, normal compliance) on a 6×3 mesh, refining k from 1/32
+    without an exact solution: the order is estimated from successive differences (Richardson):
+    implicit Euler is first order once the body flows (measured: 0.94, successive 0.89 and
+    1.00). From k = 1/4 the coarse runs cut their steps at the same places and are alike
+    (Richardson: 0.71, successive 1.01 and 0.41); the fit against a finer run said 1.16 there."""
     assert _study(tmp_path, "convergence", "normal_compliance_2d", "--cells", "6", "3", "--k",
-                  "0.25", "--T", "1", "--levels", "3", "--refine", "k") == 0
+                  "0.03125", "--T", "1", "--levels", "3", "--refine", "k") == 0
     if ROOT0:
         rows = _rows(tmp_path / "study" / "convergence.csv")
         k = [float(r["k"]) for r in rows]
-        err = [float(r["error"]) for r in rows]
-        assert 0.8 <= _slope(k, err) <= 1.4, err
-        assert "P1, implicit Euler with h" in (tmp_path / "study" / "convergence.md").read_text()
+        assert 0.8 <= _slope(k, [float(r["difference"]) for r in rows]) <= 1.2, rows
+        text = (tmp_path / "study" / "convergence.md").read_text()
+        assert "Richardson" in text and "P1, implicit Euler with h" in text, text
 
 
 def test_convergence_study_runs_the_scenes_own_discretization(tmp_path):

@@ -73,6 +73,8 @@ class ContactPart(Protocol):
         splits_force: the outputs list its force split into a normal and a tangential part.
         reports_law_force: its force on the body is its own term's (a frictionless compliant
             part: R_c assembled at its nodes), not the residual left at its nodes.
+        resists_sliding: where it presses the body it also resists the body's motion along its
+            face (friction), so it may hold a body along a rigid motion parallel to the face.
     """
 
     name: str
@@ -84,6 +86,7 @@ class ContactPart(Protocol):
     node_blocks: np.ndarray
     splits_force: bool
     reports_law_force: bool
+    resists_sliding: bool
 
     def snes_defaults(self, linear_law: bool) -> dict:
         """SNES options the part needs (e.g. the VI solver), under the user's own."""

@@ -242,7 +242,9 @@ def _check_not_passed(obstacle, points, normals, gap, unreachable, max_distance)
         i = lost[int(np.argmax(behind < max_distance))]
         raise InputError(f"the obstacle has passed through the body: it lies behind contact "
                          f"point {points[i].round(12).tolist()} (along the normal "
-                         f"{normals[i].round(12).tolist()}), whose ray met it at t = 0",
+                         f"{normals[i].round(12).tolist()}), whose ray met it at t = 0. Its "
+                         "prescribed motion takes it deeper than the body is thick: a smaller "
+                         "motion (check its size and units) or an earlier end of the run",
                          key="contact.obstacle")
 
 

@@ -228,6 +228,11 @@ class CompliancePart:
         return self.friction is not None
 
     @property
+    def resists_sliding(self) -> bool:
+        """With friction it resists the body's motion along its face where it presses."""
+        return self.friction is not None
+
+    @property
     def reports_law_force(self) -> bool:
         """A frictionless part's force is its law's term R_c at its nodes. (With friction the
         term, assembled after the step, would see the committed slip history instead of the

@@ -72,6 +72,11 @@ class SignoriniPart:
         """With friction the outputs split its force into normal and tangential parts."""
         return self.friction is not None
 
+    @property
+    def resists_sliding(self) -> bool:
+        """With friction it resists the body's motion along its face where it presses."""
+        return self.friction is not None
+
     #: its force is the residual left at its nodes (the bound's multiplier)
     reports_law_force = False
 
@@ -212,6 +217,28 @@ class DrivenSignoriniPart(SignoriniPart):
         return gap_along_normal(shifted, cd.points, normals, max_distance=self.law.max_distance,
                                 signed=True, check_side=False, may_miss=cd.unreachable)
 
+    def _gaps_in_run(self, d: float, timed: bool = True) -> np.ndarray:
+        """:meth:`_gaps_at` once the run has started (collective): a ray that met the obstacle
+        at t = 0 and misses it now means that the force has pushed it through the body (the
+        message gives the time if ``timed``; :func:`~vpcontact.model.contact.moved_parts` adds
+        it itself)."""
+        error = None
+        try:
+            gaps = self._gaps_at(d)
+        except InputError as err:
+            error = err
+        if self.comm.allreduce(error is not None, op=MPI.LOR):
+            when = f"at t = {self._time:.6g} " if timed else ""
+            raise InputError(
+                f"{when}the obstacle pressed by the force has passed through "
+                f"the body: the force moved it {abs(d):.4g} along "
+                f"{self._e[:self._bs].round(12).tolist()}, past contact nodes whose normal rays "
+                "met it at t = 0 (the body does not carry this force: it yields or is too thin "
+                "or soft for it). A smaller force, a stiffer or stronger body, or smaller steps "
+                "([time] k) if it is only the step's prediction that overshoots",
+                key="contact.force", part=self.name)
+        return gaps
+
     def _touching_displacement(self) -> float:
         """The d at which the obstacle, moved along e, first touches a node (collective)."""
         d = 0.0
@@ -237,10 +264,10 @@ class DrivenSignoriniPart(SignoriniPart):
         raise InputError("the obstacle cannot be brought into contact along the force's "
                          "direction", key="contact.force")
 
-    def _linearize(self, d: float) -> None:
+    def _linearize(self, d: float, timed: bool = True) -> None:
         """The gaps at d = d_p (the bounds: u_ν − (e · ν) δ ≤ g(d_p))."""
         self._predicted, self.increment = d, 0.0
-        self._nodes.gap = self._gaps_at(d)
+        self._nodes.gap = self._gaps_in_run(d, timed)
         self._bound = self._nodes.gap.copy()
 
     # -- the part's protocol ----------------------------------------------------------------
@@ -249,7 +276,7 @@ class DrivenSignoriniPart(SignoriniPart):
         (t1, d1), (t0, d0) = self._committed[-1], self._committed[0]
         d = d1 if t1 == t0 else d1 + (time - t1) / (t1 - t0) * (d1 - d0)
         self._time = time
-        self._linearize(d)
+        self._linearize(d, timed=False)
 
     def bound_gaps(self) -> np.ndarray:
         return self._bound
@@ -272,7 +299,7 @@ class DrivenSignoriniPart(SignoriniPart):
         that difference of contact, linearize about d
         (the step is then solved again from where it is; the difference shrinks by about θ²
         per round, θ the face's turn from the normal to e). Collective; True if it did."""
-        gaps = self._gaps_at(self.displacement)
+        gaps = self._gaps_in_run(self.displacement)
         linear = self._bound + self._slopes * self.increment
         error = np.abs(gaps - linear)
         # the nodes whose contact the error could decide: in contact, or within it of contact
@@ -295,7 +322,7 @@ class DrivenSignoriniPart(SignoriniPart):
 
     def commit(self, time: float, x=None) -> None:
         self._committed = (self._committed + [(time, self.displacement)])[-2:]
-        self._nodes.gap = self._gaps_at(self.displacement)  # where the obstacle is now
+        self._nodes.gap = self._gaps_in_run(self.displacement)  # where the obstacle is now
         if self.friction is not None and x is not None:
             self.friction.commit(x)
 

@@ -29,12 +29,13 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from vpcontact import __version__
-from vpcontact.errors import Interrupted, ObstacleOutOfReach, OutputError
+from vpcontact.errors import InputError, Interrupted, ObstacleOutOfReach, OutputError
 from vpcontact.model.constitutive import Perzyna
 from vpcontact.output import checkpoint, plots, runner
 from vpcontact.output.fields import ContactHistory, nodal_values, on_rank0
 from vpcontact.output.forces import ForceHistory
 from vpcontact.scene.builder import Model
+from vpcontact.scene.schema import SceneError
 from vpcontact.solver.snes_options import time_split
 
 #: k E/μ* above which a run with the linearized Perzyna step is warned (see
@@ -126,6 +127,8 @@ class Session:
         warnings += self._option_warnings() if error is None else []
         warnings += self._law_warnings() if error is None else []
         warnings += self._strain_warnings() if error is None else []
+        held = self.model.problem.held  # a body held by its contacts that was unloaded
+        warnings += held.warnings if held is not None and error is None else []
         try:
             self._write_summary(record, wall, error, warnings)
         except OSError as err:
@@ -320,13 +323,23 @@ class Session:
 
 def _located(scene, err: Exception) -> Exception:
     """A moving obstacle that leaves the reach of the contact nodes' rays during the run is an
-    error of the scene's motion (or rotation, or moving level set): say where in the file."""
+    error of the scene's motion (or rotation, or force, or moving level set): say where in the
+    file. Other run-time refusals (an :class:`InputError` naming its scene key, e.g. no
+    equilibrium, an obstacle pressed through the body) are located at their key."""
+    if isinstance(err, InputError) and not isinstance(err, (ObstacleOutOfReach, SceneError)):
+        if err.key is None:
+            return err
+        key = err.key
+        if err.part is not None and key.split(".")[0] == "contact":
+            key = scene.contact_key(scene.contact_part(err.part)[0]) + key[len("contact"):]
+        return scene.error(key, str(err))
     if not isinstance(err, ObstacleOutOfReach):
         return err
     index, contact = scene.contact_part(err.part)
     where = scene.contact_key(index)
     key = (f"{where}.motion" if contact.motion is not None else
-           f"{where}.rotation" if contact.rotation is not None else f"{where}.obstacle")
+           f"{where}.rotation" if contact.rotation is not None else
+           f"{where}.force" if contact.force is not None else f"{where}.obstacle")
     return scene.error(key, str(err))
 
 

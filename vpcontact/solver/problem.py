@@ -30,7 +30,7 @@ from mpi4py import MPI
 
 from vpcontact.model.extent import mesh_extent
 from vpcontact.errors import ConvergenceError, InputError, NonFiniteStateError, StepRejected
-from vpcontact.solver.held import HeldByContacts, check_held
+from vpcontact.solver.held import DRIFTING, NO_EQUILIBRIUM, HeldByContacts, check_held
 from vpcontact.solver.line_search import line_search_for
 from vpcontact.solver.step_solver import StepSolver
 from vpcontact.solver.variables import ChangeOfVariables
@@ -361,7 +361,7 @@ class QuasistaticProblem:
             # a body that nothing holds drifts off on its stabilising spring (far: Newton stalls
             # on round-off): say that rather than "did not converge"
             try:
-                self._check_held_step(t_new)
+                self._check_held_step(t_new, DRIFTING)
             finally:
                 self._roll_back(u_old, others_old, t_new - dt)
             raise
@@ -443,11 +443,11 @@ class QuasistaticProblem:
         self.time.value = t_old
         self.state.rollback()
 
-    def _check_held_step(self, t: float) -> None:
-        """A body held by its contacts: refuse the step if the stabilising spring carries a
-        share of the applied forces (:meth:`~vpcontact.solver.held.HeldByContacts.check_step`)."""
+    def _check_held_step(self, t: float, share: float = NO_EQUILIBRIUM) -> None:
+        """A body held by its contacts: refuse the step if the stabilising spring carries
+        ``share`` of the applied forces (:meth:`~vpcontact.solver.held.HeldByContacts.check_step`)."""
         if self.held is not None:
-            self.held.check_step(self._forces.applied_size(), t)
+            self.held.check_step(self._forces.applied_size(), t, share)
 
     def check_held(self, times) -> None:
         """A body held by its contacts: refuse (InputError at ``boundary``) a free rigid motion

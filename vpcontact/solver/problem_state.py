@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: MIT
 """Checkpoints of a :class:`~vpcontact.solver.problem.QuasistaticProblem`: what continues a run
 exactly — u and the other fields, the quadrature-point state, the law's internal variables, the
-predictor's and the time scheme's history, each contact part's state and arrays, and the step
-solver's. The arrays keep the names of the files written before (``u``, ``stress``, …,
+predictor's and the time scheme's history, each contact part's state and arrays, the step
+solver's, and for a body held by its contacts the stabilising spring's anchor and force
+scale. The arrays keep the names of the files written before (``u``, ``stress``, …,
 ``_u_prev``, ``bdf2_w_prev``, ``contact<i>_…``, ``solver_…``), so that those still resume."""
 
 from __future__ import annotations
@@ -31,11 +32,14 @@ def checkpoint(problem) -> tuple[dict, dict]:
         arrays.update({f"contact{i}_{k}": v for k, v in part.arrays().items()})
     solver_flags, solver_arrays = problem.solver.checkpoint()
     arrays.update({f"solver_{k}": v for k, v in solver_arrays.items()})
+    if problem.held is not None:  # the stabilising spring's anchor (a body held by contacts)
+        arrays["held_position"] = problem.held.held.x.array
     scalars = {"time": float(problem.time.value), "dt": problem.dt,
                "step_index": problem.step_index, **problem.history.scalars(),
                "contact_active": problem._contact_active, "tangent_key": problem._tangent_key,
                **problem.scheme.scalars(),
-               "solver": solver_flags, "contacts": [p.state() for p in problem.contacts]}
+               "solver": solver_flags, "contacts": [p.state() for p in problem.contacts],
+               "held": None if problem.held is None else problem.held.state()}
     return scalars, {k: np.asarray(v) for k, v in arrays.items()}
 
 
@@ -70,6 +74,9 @@ def restore(problem, scalars: dict, arrays: dict) -> None:
         prefix = f"contact{i}_"
         part.restore(state, scalars["time"], {k[len(prefix):]: v for k, v in arrays.items()
                                               if k.startswith(prefix)})
+    if problem.held is not None:  # (a checkpoint written before it kept no anchor: u's)
+        problem.held.restore(scalars.get("held") or {},
+                             arrays.get("held_position", problem.u.x.array))
     if problem.variables is not None:
         problem.variables.refresh()
     if any(p.moving for p in problem.contacts):

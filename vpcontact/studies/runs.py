@@ -11,9 +11,14 @@ final time). The error of a run is
 
     max over sampled times t and vertices x of |u_run(x, t) - u_ref(x, t)|   (all components),
 
-the paper's "max nodal displacement error", against the exact solution where the scene has one
-(``--exact paper_1d``: eqs. (21)-(22) for the §4.2.1 bar) or else a finer run of the most
-accurate variant. Wall time is that of the time loop on the slowest rank (mesh, forms and
+the paper's "max nodal displacement error", against an exact solution where one is given
+(``--exact paper_1d``: eqs. (21)-(22) for the §4.2.1 bar; or ``--exact "EXPR; ..."``, u(x, t) as
+one expression of x and t per component, read by the scenes' safe evaluator). Without one, the
+convergence study does not measure its runs against a finer run and fit that (the finer run's
+own error biases the fit upwards: a first-order ramped Perzyna bar came out at order 1.47); it
+estimates the order from the differences of successive runs (Richardson,
+:func:`richardson`). The work–precision study compares with a finer run of the most accurate
+variant. Wall time is that of the time loop on the slowest rank (mesh, forms and
 sampling excluded; each method's coarsest run is done once untimed first, since a process's first
 run of a method pays one-off costs); work is also counted as dofs × steps.
 """
@@ -31,7 +36,7 @@ from mpi4py import MPI
 
 from vpcontact.errors import InputError, VpcontactError
 from vpcontact.paper import bar1d
-from vpcontact.scene import builder
+from vpcontact.scene import builder, expressions
 from vpcontact.solver.stepping import StepControl, advance
 
 
@@ -65,6 +70,7 @@ class Run:
     newton_iterations: int = 0
     wall_time: float = 0.0
     error: Optional[float] = None
+    difference: Optional[float] = None  # max |u - u_finer| to the next finer run (Richardson)
     skipped: str = ""              # why the variant could not run ("" if it ran)
     samples: Optional[np.ndarray] = dataclasses.field(default=None, repr=False)
 
@@ -90,6 +96,26 @@ def _paper_1d(scene) -> Callable[[np.ndarray, float], np.ndarray]:
 
 #: Exact solutions a study can compare against, by name.
 EXACT = {"paper_1d": _paper_1d}
+
+#: Separates the components of an exact solution given as expressions.
+COMPONENT_SEPARATOR = ";"
+
+
+def _expression(scene, text: str) -> Callable[[np.ndarray, float], np.ndarray]:
+    """u(x, t) given as expressions of ``x[i]`` and ``t``, one per displacement component,
+    separated by :data:`COMPONENT_SEPARATOR` (e.g. ``"x[0]*(0.02*t + max(t - 0.5, 0)**2)"`` for
+    a 1-D bar). They are checked by :func:`vpcontact.scene.expressions.parse` (a whitelist walked
+    on the syntax tree, never Python's eval)."""
+    texts = [part.strip() for part in text.split(COMPONENT_SEPARATOR)]
+    if len(texts) != scene.dim:
+        raise InputError(f"--exact: {len(texts)} expression(s) for the {scene.dim} displacement "
+                         f"component(s) of this {scene.dim}-D scene (separate them by "
+                         f"{COMPONENT_SEPARATOR!r})")
+    parsed = [expressions.parse(part, names=("x", "t"), dim=scene.dim) for part in texts]
+
+    def exact(x: np.ndarray, t: float) -> np.ndarray:
+        return np.stack([e.numpy(np.asarray(x, float).T, t) for e in parsed], axis=1)
+    return exact
 
 
 # -- one run ----------------------------------------------------------------------------------
@@ -249,32 +275,85 @@ def pareto_front(runs: Sequence[Run], rtol: float = 1e-6) -> list[Run]:
 
 REFINEMENTS = ("both", "h", "k")
 
+#: How the convergence study's reference reads when no exact solution is given.
+RICHARDSON = "Richardson estimate"
+
 
 def exact_solution(scene, name: Optional[str]):
-    """u(x, t) of the exact solution ``name`` for ``scene`` (None for None); checked up front."""
+    """u(x, t) of the exact solution ``name`` for ``scene`` (None for None): one of
+    :data:`EXACT`, or expressions of x and t (:func:`_expression`); checked up front."""
     if name is None:
         return None
-    if name not in EXACT:
-        raise InputError(f"unknown exact solution {name!r}; known: {', '.join(EXACT)}")
-    return EXACT[name](scene)
+    if name in EXACT:
+        return EXACT[name](scene)
+    try:
+        return _expression(scene, name)
+    except expressions.ExpressionError as err:
+        raise InputError(f"unknown exact solution {name!r}: neither one of {', '.join(EXACT)} "
+                         f"nor u(x, t) as expressions of x[i] and t ({err})") from None
+
+
+def _execute_reference(scene, grid: Grid, finer: Run, comm) -> str:
+    """Run ``finer`` (the reference run); its description."""
+    execute(scene, grid, finer, comm)
+    if finer.skipped:
+        raise InputError(f"the reference run ({finer.method.label}) cannot run: {finer.skipped}")
+    return (f"{finer.method.label} with h = {finer.h:.4g}, k = {finer.k:.4g} "
+            f"({finer.dofs} dofs, {finer.steps} steps)")
 
 
 def _reference(scene, grid: Grid, exact: Optional[str], finer: Run, comm):
     """Samples of the exact solution, or of the run ``finer`` (executed here)."""
     if exact is not None:
         return reference_samples(grid, exact_solution(scene, exact)), f"exact solution {exact!r}"
-    execute(scene, grid, finer, comm)
-    if finer.skipped:
-        raise InputError(f"the reference run ({finer.method.label}) cannot run: {finer.skipped}")
-    return finer.samples, (f"{finer.method.label} with h = {finer.h:.4g}, k = {finer.k:.4g} "
-                           f"({finer.dofs} dofs, {finer.steps} steps)")
+    label = _execute_reference(scene, grid, finer, comm)
+    return finer.samples, label
+
+
+def richardson(runs: Sequence[Run], finest: Run) -> float:
+    """The observed order p from the differences of successive runs, without an exact solution.
+
+    Each level halves the refined parameter r (h, k or both), so for an error e_i ≈ C r_i^p
+    the differences d_i = max |u_i − u_{i+1}| (``finest`` follows the last of ``runs``) are
+    C r_i^p (1 − 2^−p): they fall like the errors themselves, and from three runs
+    p = log(d_{i−1}/d_i)/log 2 (Richardson). Over more runs p is the least-squares slope of
+    log₂ d_i against the level. Each run's ``difference`` is set, and its ``error`` to the
+    estimate e_i = d_i/(1 − 2^−p) (exact for an exact power law; d_i/(2^p − 1) is the finer
+    run's).
+
+    Measuring each run against the finest run instead, e_i − e_L = C r_i^p (1 − 2^{(i−L)p})
+    falls faster than e_i near the reference and the fitted order comes out too high.
+
+    Raises:
+        InputError: two successive runs agree to round-off (no order to estimate), or the
+            differences do not fall (p ≤ 0: no convergence is observed).
+    """
+    chain = list(runs) + [finest]
+    diffs = np.array([float(np.max(np.abs(a.samples - b.samples)))
+                      for a, b in zip(chain, chain[1:])])
+    scale = max(float(np.max(np.abs(finest.samples))), np.finfo(float).tiny)
+    if np.any(diffs <= 1e-13 * scale):
+        raise InputError(f"successive runs agree to round-off (differences "
+                         f"{', '.join(f'{d:.2e}' for d in diffs)}): this discretization is exact "
+                         "for the scene along this refinement, there is no order to estimate")
+    p = -float(np.polyfit(np.arange(len(diffs)), np.log2(diffs), 1)[0])
+    if not p > 0:
+        raise InputError(f"the differences between successive runs do not fall "
+                         f"({', '.join(f'{d:.3e}' for d in diffs)}; order {p:.2f}): refine from "
+                         "a finer coarsest level (--cells, --k) or give an exact solution")
+    for run, d in zip(runs, diffs):
+        run.difference = float(d)
+        run.error = float(d) / (1.0 - 2.0 ** -p)
+    return p
 
 
 def convergence(scene, grid: Grid, method: Method, refine: str = "both", levels: int = 4,
                 exact: Optional[str] = None, comm=MPI.COMM_WORLD,
                 progress: Optional[Callable[[Run], None]] = None) -> tuple[list[Run], str]:
-    """Refine h, k or both by halving ``levels`` times; errors against ``exact`` or a run one
-    level finer along the same path. Returns the runs and a description of the reference."""
+    """Refine h, k or both by halving ``levels`` times; errors against ``exact``, or else
+    estimated from the differences of successive runs with one more level (Richardson,
+    :func:`richardson`). Returns the runs and a description of what the errors are measured
+    against ("exact solution …" or "Richardson …")."""
     if refine not in REFINEMENTS:
         raise InputError(f"refine must be one of {', '.join(REFINEMENTS)}, got {refine!r}")
     if not 2 <= levels <= 8:
@@ -293,7 +372,14 @@ def convergence(scene, grid: Grid, method: Method, refine: str = "both", levels:
         if progress is not None:
             progress(run)
         runs.append(run)
-    reference, label = _reference(scene, grid, exact, new_run(grid, method, *path(levels)), comm)
+    finer = new_run(grid, method, *path(levels))
+    if exact is None:
+        label = _execute_reference(scene, grid, finer, comm)
+        order = richardson(runs, finer)
+        return runs, (f"{RICHARDSON} (no exact solution given): each run against the next finer "
+                      f"one, the finest being {label}; order {order:.2f} fitted to those "
+                      "differences, errors estimated from them")
+    reference, label = _reference(scene, grid, exact, finer, comm)
     measure(runs, reference)
     return runs, label
 
