@@ -45,14 +45,15 @@ def test_mixed_units_give_a_yield_strain_of_1190_located_at_sigma_y():
 
 def test_a_foundation_too_soft_to_carry_the_working_pressure():
     """Elastic law: working pressure E·1e-3 = 1e5; μ = 100 needs a penetration of 1e7 in a
-    unit square (μ read as a friction coefficient, say); μ = 1e-5 needs 1."""
+    unit square (μ read as a friction coefficient, say); μ = 1e-2 needs 1e3, 1e3 times the
+    body's size: the limit, not warned."""
     (found,) = _warned(BASE)
     assert (found.path, found.line) == ("contact.mu", _line(BASE, "mu = "))
     assert "the penetration (mu p)^(1/alpha) = 1e+07" in found.message
     assert "not a friction coefficient" in found.message and "1e+07 times the body's size 1" \
         in found.message
-    assert _warned(BASE.replace("mu = 100.0", "mu = 1e-5")) == ()
-    assert _warned(BASE.replace("mu = 100.0", "mu = 1.01e-5"))
+    assert _warned(BASE.replace("mu = 100.0", "mu = 1e-2")) == ()
+    assert _warned(BASE.replace("mu = 100.0", "mu = 1.01e-2"))
     # α < 1: δ = (μ p)^(1/α) = (1e-3·1e5)^2 = 1e4
     (found,) = _warned(BASE.replace("mu = 100.0", "mu = 1e-3\nalpha = 0.5"))
     assert "= 1e+04" in found.message
@@ -72,9 +73,9 @@ def test_the_body_size_of_a_gmsh_mesh_comes_from_the_caller():
 
 
 def test_each_part_of_an_array_is_located_at_its_own_table():
-    text = scene_text("held_on_a_compliant_face").replace("mu = 0.001", "mu = 1e3")
+    text = scene_text("held_on_a_compliant_face").replace("mu = 0.001", "mu = 1e6")
     (found,) = _warned(text)
-    assert (found.path, found.line) == ("contact[1].mu", _line(text, "mu = 1e3"))
+    assert (found.path, found.line) == ("contact[1].mu", _line(text, "mu = 1e6"))
 
 
 def test_more_than_ten_thousand_steps():
@@ -94,13 +95,7 @@ def test_overridden_keys_are_warned_at_their_override():
 
 @pytest.mark.parametrize("name", sorted(bundled()))
 def test_bundled_scenes(name):
-    """The paper's §4.2.2 foundation (μ = 100 under a block of E = 1e8, σ_Y = √10) is warned:
-    it carries σ_Y only after sinking 316, 53 times the block's size (in the paper's test it
-    carries 0.0041 of the load 10 at T, tests/reference/bundled_summaries.json). No other
-    bundled scene is."""
-    found = warnings(load(bundled()[name]))
-    if name == "normal_compliance_2d":
-        (problem,) = found
-        assert problem.path == "contact.mu" and "= 316" in problem.message
-    else:
-        assert found == (), found
+    """No bundled scene is warned. The paper's §4.2.2 foundation (μ = 100 under a block of
+    E = 1e8, σ_Y = √10) carries σ_Y only after sinking 316, 53 times the block's size (in the
+    paper's test it carries 0.0041 of the load 10 at T): soft on purpose, below SOFT_FACTOR."""
+    assert warnings(load(bundled()[name])) == ()
