@@ -12,6 +12,12 @@ NormalCompliance.part`); the problem composes the list and never asks which law 
   (:func:`merged_bounds`, :func:`merged_frames`);
 * a part with UFL terms (normal compliance) adds them to the residual and the Jacobian.
 
+**Nodes shared with a Dirichlet part.** A node every component of which is prescribed is no
+contact node: its residual is the support's reaction. At a node with some components prescribed
+(the corner where a pushed face meets the contact face) the part's law still acts on the
+prescribed ones (friction, a foundation's push): the part reports that force
+(:meth:`ContactPart.prescribed_forces`) and the support's reaction is the residual less it.
+
 **Nodes shared by two parts.** A node lies in at most one part: the first listed part that
 reaches it owns it, and later parts leave it out (its constraint, its force, its output row).
 Normal compliance still integrates over all of its own facets, so a shared node gets the
@@ -103,6 +109,16 @@ class ContactPart(Protocol):
 
     def bound_gaps(self) -> np.ndarray:
         """Bounded parts: the right-hand sides of their bounds at ``nodes.dofs``."""
+
+    def bind_prescribed(self, prescribed: np.ndarray) -> None:
+        """The Dirichlet dofs (local u indices), before :meth:`prescribed_forces` (collective)."""
+
+    def prescribed_forces(self) -> tuple[np.ndarray, np.ndarray]:
+        """(owned local u dofs, values): the part's force on the body at the dofs of its nodes
+        that a Dirichlet part prescribes — its law acts there (friction at a node whose
+        tangential motion is prescribed), but the solver's row is the support's, so the
+        equilibrium residual there holds the support's reaction and this force together
+        (:mod:`vpcontact.solver.support_forces` separates them). Collective."""
 
     def solver_terms(self) -> list:
         """Nodal terms the step solver adds to its residual and Jacobian (friction on a

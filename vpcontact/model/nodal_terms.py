@@ -77,6 +77,16 @@ class NodalTerm:
         self.slots = positions[self.u_slots].astype(np.int32)
         self.tangential = positions[self.u_tangential].astype(np.int32)
 
+    def at_prescribed_rows(self, force: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(local u dofs, values): the nodal forces ``force`` (n, bs − 1; frame components, on
+        the body) at the tangential rows a Dirichlet part prescribes, as components of u (a
+        prescribed component keeps its axis as the frame's column, :mod:`vpcontact.model.
+        frames`). The solver leaves those rows to the support (u = u_D there), so the forces are
+        not in its residual: the support forces take them from here."""
+        i, a = np.nonzero(~self.free)
+        dofs = self.u_tangential[i, a].astype(np.int32)
+        return dofs, self.frame_tangents[i, dofs % self.bs, a] * force[i, a]
+
     def on_bound(self, xs: np.ndarray) -> np.ndarray:
         """Which nodes are on their bound at the iterate ``xs`` (SNES's local array)."""
         return self.signs * xs[self.slots] >= self.part.bound_gaps() / self.scale - ON_BOUND

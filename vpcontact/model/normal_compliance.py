@@ -65,6 +65,9 @@ from typing import Optional
 import numpy as np
 import ufl
 from dolfinx import fem
+import dolfinx.fem.petsc  # noqa: F401  (fem.petsc)
+from mpi4py import MPI
+from petsc4py import PETSc
 
 from vpcontact.errors import InputError
 from vpcontact.model.contact_nodes import Surface, contact_dofs, unrolled
@@ -193,6 +196,9 @@ class CompliancePart:
         self.force_dofs = unrolled(bs, blocks, exclude)
         self.node_blocks = np.unique(self.force_dofs // bs).astype(np.int32)
         self._nodes = None
+        self._residual = None  # its UFL residual term (see terms)
+        self._held: Optional[tuple] = None  # (form, dofs, vector): see bind_prescribed
+        self._held_values = np.zeros(0)  # its force there at the last commit (with friction)
         #: the part's friction (None: frictionless)
         self.friction: Optional[CompliantFriction] = (
             None if law.friction is None
@@ -257,7 +263,45 @@ class CompliancePart:
             dpressure = (1.0 / law.mu) * law.slope(u, normal) * ufl.dot(du, normal)
             r, j = self.friction.terms(u, du, v, normal, pressure, dpressure, ds(law.tag))
             residual, jacobian = residual + r, jacobian + j
+        self._residual = residual
         return residual, jacobian
+
+    def bind_prescribed(self, prescribed: np.ndarray) -> None:
+        """The Dirichlet dofs ``prescribed`` (local u indices). At the prescribed dofs of its
+        nodes (a node of a pushed face that rests on the foundation: its tangential motion
+        prescribed) the part's term still acts — the foundation's push, its friction — but the
+        solver's row there is the support's (u = u_D), so the equilibrium residual there is the
+        support's reaction and the term together. The part reports its term's share
+        (:meth:`prescribed_forces`); a node every component of which is prescribed is no
+        contact node (its whole residual stays the support's). Collective."""
+        rows = self.node_rows.ravel()
+        dofs = rows[np.isin(rows, prescribed)].astype(np.int32)
+        if self._residual is None or not self.u.function_space.mesh.comm.allreduce(
+                bool(len(dofs)), op=MPI.LOR):
+            return
+        form = fem.form(self._residual)
+        self._held = (form, dofs, fem.petsc.create_vector(form))
+        self._held_values = self._term_at_held()
+
+    def _term_at_held(self) -> np.ndarray:
+        """−R_c at the prescribed dofs of its nodes, the force on the body (collective)."""
+        form, dofs, vec = self._held
+        with vec.localForm() as local:
+            local.set(0.0)
+        fem.petsc.assemble_vector(vec, form)
+        vec.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+        return 0.0 - vec.array[dofs]
+
+    def prescribed_forces(self) -> tuple[np.ndarray, np.ndarray]:
+        """(local u dofs, values): the part's force on the body at the prescribed dofs of its
+        nodes (:meth:`bind_prescribed`): its term now; with friction its term as the last
+        accepted step left it (assembled before the step's slip history is committed: assembled
+        after, it sees the committed history instead; after a restart it is the restored
+        state's until the next step). Collective."""
+        if self._held is None:
+            return np.zeros(0, np.int32), np.zeros(0)
+        values = self._term_at_held() if self.friction is None else self._held_values
+        return self._held[1], values
 
     def friction_state(self) -> Optional[dict]:
         """At this rank's nodes, with friction: the tangential traction t (N, d), the slip
@@ -304,6 +348,8 @@ class CompliancePart:
 
     def commit(self, time: float, x=None) -> None:
         if self.friction is not None:
+            if self._held is not None:  # (before the history moves on: see prescribed_forces)
+                self._held_values = self._term_at_held()
             self.friction.commit()
 
     def state(self) -> dict:
@@ -315,6 +361,8 @@ class CompliancePart:
     def restore(self, state: dict, time: float, arrays: Optional[dict] = None) -> None:
         if self.friction is not None:
             self.friction.restore(arrays or {})
+            if self._held is not None:
+                self._held_values = self._term_at_held()
 
     def pressure(self) -> np.ndarray:
         cd = self.nodes

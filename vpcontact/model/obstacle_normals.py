@@ -89,6 +89,12 @@ class ObstacleNormalForce(NodalTerm):
         """The nodal tangential forces λ_i s_i (frame components) for normal forces λ."""
         return np.where(self.free, lam[:, None] * self.tilt, 0.0)
 
+    def prescribed_forces(self) -> tuple[np.ndarray, np.ndarray]:
+        """(local u dofs, values): λ_i s_i at the tangential dofs a Dirichlet part prescribes
+        (λ of the last residual: the solution's after a step), which the solver's rows there
+        leave to the support (:meth:`NodalTerm.at_prescribed_rows`)."""
+        return self.at_prescribed_rows(self._lam[:, None] * self.tilt)
+
     # -- hooks of the step solver --------------------------------------------------------------
     def residual(self, x: PETSc.Vec, b: PETSc.Vec) -> None:
         """b ← b − λ s on the tangential rows (λ read off b first)."""

@@ -89,6 +89,21 @@ class SignoriniPart:
     def terms(self, u, du, v, normal, ds):
         return None
 
+    def bind_prescribed(self, prescribed: np.ndarray) -> None:
+        """(Nothing: its friction learnt the Dirichlet dofs from the step solver.)"""
+
+    def prescribed_forces(self) -> tuple[np.ndarray, np.ndarray]:
+        """(local u dofs, values): the forces of its nodal terms (friction, the obstacle's
+        normals) on the body at the tangential dofs of its nodes that a Dirichlet part
+        prescribes (:meth:`~vpcontact.model.nodal_friction.NodalFriction.prescribed_forces`);
+        none without such terms (a prescribed normal component is no bound: no contact force
+        there). A dof may come twice."""
+        pieces = [term.prescribed_forces() for term in self.solver_terms()]
+        if not pieces:
+            return np.zeros(0, np.int32), np.zeros(0)
+        return (np.concatenate([dofs for dofs, _ in pieces]),
+                np.concatenate([values for _, values in pieces]))
+
     def update(self, time: float) -> None:
         """The gaps at ``time`` (raises InputError where a ray loses the obstacle)."""
         if self.moving:
@@ -110,8 +125,8 @@ class SignoriniPart:
         the node's area), slip over the step, whether the node slipped; None without."""
         if self.friction is None or self.friction.last is None:
             return None
-        last, areas = self.friction.last, self.friction.areas
-        return {"traction": last["force"] / np.where(areas > 0, areas, 1.0)[:, None],
+        last, areas = self.friction.last, self.areas
+        return {"traction": last["force"] / areas[:, None],
                 "slip": last["slip"], "slips": last["slips"]}
 
     def solver_terms(self) -> list:
@@ -144,11 +159,25 @@ class SignoriniPart:
         if self.friction is not None:
             self.friction.restore(arrays or {})
 
+    @property
+    def areas(self) -> np.ndarray:
+        """A_i, each node's HRZ-lumped share of Γ3 (its pressure and its friction traction are
+        its forces over it)."""
+        return self.monitor.areas
+
+    def normal_forces(self) -> np.ndarray:
+        """λ_i at the nodes: with friction the accepted step's, which its friction's bound
+        took (so |t_i| ≤ 𝔣 λ_i / A_i holds to the last digit), else the monitor's (collective)."""
+        if self.friction is not None and self.friction.last is not None:
+            return self.friction.last["lam"]
+        return self.monitor.normal_forces()
+
     def pressure(self) -> np.ndarray:
-        return self.monitor.nodal_pressure()
+        """σ_ν,i = −λ_i / A_i (:mod:`vpcontact.model.contact_monitor`; collective)."""
+        return self.monitor.nodal_pressure(self.normal_forces())
 
     def report(self) -> "ContactReport":
-        return self.monitor.report()
+        return self.monitor.report(normal_forces=self.normal_forces())
 
     def touching(self, tolerance: float) -> bool:
         cd = self._nodes

@@ -2,7 +2,15 @@
 """The forces that hold the body at the current state: each Dirichlet part's reaction and each
 contact part's force, from the equilibrium residual (σ, ε(v)) − (f, v) − P (P the point loads),
 or, for a part that reports its own term's force, from that term
-(``reports_law_force`` of :class:`~vpcontact.model.contact.ContactPart`)."""
+(``reports_law_force`` of :class:`~vpcontact.model.contact.ContactPart`).
+
+At a dof that a Dirichlet part prescribes at a contact node (the corner where a pushed face
+meets a frictional face) the residual R_j is the support's reaction and the contact law's force
+c_j together: the reaction is R_j − c_j, and c_j is the contact part's
+(:meth:`~vpcontact.model.contact.ContactPart.prescribed_forces`). Counted as the support's, a
+block pushed between two frictional faces (𝔣 = 0.2 and 0.4 under 10 N) needed 5.897 instead of
+6 on 32×16 cells, its two corners' friction.
+"""
 
 from __future__ import annotations
 
@@ -42,24 +50,31 @@ class SupportForces:
         self._compliance_forces = compliance_forces
         self._point_forces = point_forces
         self._load_form = load_form
+        for part in contacts:
+            part.bind_prescribed(dirichlet.prescribed)
 
     def support_forces(self, per_part: bool = False, split: bool = False) -> tuple:
         """See :meth:`~vpcontact.solver.problem.QuasistaticProblem.support_forces`."""
         values = self.equilibrium_values()
-        reactions = self.dirichlet.reactions(values)
+        shared = [part.prescribed_forces() for part in self.contacts]
+        supports = values.copy()
+        for dofs, forces in shared:
+            np.subtract.at(supports, dofs, forces)
+        reactions = self.dirichlet.reactions(supports)
         dim = self.V.dofmap.index_map_bs
-        parts = self.contact_forces(values)
+        parts = self.contact_forces(values, shared)
         local = np.array([f.reshape(-1, dim).sum(axis=0) for f in parts]).reshape(-1, dim)
         forces = self.comm.allreduce(local, op=MPI.SUM)
         result = (reactions, forces if per_part else forces.sum(axis=0))
         return result + (self.normal_and_tangential(parts),) if split else result
 
-    def contact_forces(self, values: np.ndarray) -> list[np.ndarray]:
+    def contact_forces(self, values: np.ndarray, shared: list) -> list[np.ndarray]:
         """Each contact part's force on the body at this rank's owned dofs (0 elsewhere), from
         the residual ``values`` of :meth:`equilibrium_values` (bounded parts: the multiplier
-        of the bound, applied loads left out) or from the part's compliance term (collective)."""
+        of the bound, applied loads left out) or from the part's compliance term, and at the
+        prescribed dofs of its nodes its ``shared`` (dofs, forces) (collective)."""
         forces = []
-        for i, part in enumerate(self.contacts):
+        for i, (part, (held, force)) in enumerate(zip(self.contacts, shared)):
             f = np.zeros(values.size)
             if i in self._compliance_forces:
                 form, dofs, vec = self._compliance_forces[i]
@@ -70,6 +85,7 @@ class SupportForces:
                 f[dofs] = 0.0 - vec.array[dofs]  # (R_c is the body's push on the foundation)
             else:
                 f[part.force_dofs] = values[part.force_dofs]
+            np.add.at(f, held, force)
             forces.append(f)
         return forces
 
