@@ -232,7 +232,8 @@ def _driven_parts(forces) -> list[int]:
     if not forces.driver or forces.driver[-1] is None:
         return []
     d = np.array(forces.driver, dtype=float)
-    if not np.ptp(d[np.isfinite(d)], initial=0.0) > 0:
+    d = d[np.isfinite(d)]
+    if not (len(d) and d.max() > d.min()):
         return []
     parts = np.array(forces.parts)
     if parts.size == 0:
