@@ -212,15 +212,18 @@ def test_force_displacement_panels_only_where_they_mean_something(driver, parts,
     assert plots._driven_parts(_forces(driver, parts)) == panels
 
 
+@pytest.mark.parametrize("law", ['type = "normal_compliance"\nmu = 1e-3',
+                                 'type = "signorini"'])
 def test_a_contact_part_that_never_touched_is_warned_without_contact_output(shared_tmp_path,
-                                                                             capsys):
+                                                                             capsys, law):
     """The elastic cantilever with a floor far below it, contact.csv and figures off: the
-    run still says that the floor never touched."""
+    run still says that the floor never touched (a compliant floor was not recorded, and not
+    warned about, without contact output)."""
     text = scenes.bundled()["elastic_2d"].read_text().replace(
         "[boundary.end]", '[boundary.floor]\nkind = "contact"\nplane = { axis = "y", value = '
         '0.0 }\n\n[boundary.end]').replace("figures = false", "figures = false\n"
                                           "contact_csv = false\nxdmf = false")
-    text += '\n[contact]\ntype = "signorini"\nboundary = "floor"\ngap = 10.0\n'
+    text += f'\n[contact]\n{law}\nboundary = "floor"\ngap = 10.0\n'
     out = _run(shared_tmp_path, "far_floor", text)
     assert not (out / "contact.csv").exists()
     warnings = json.loads((out / "summary.json").read_text())["warnings"]
