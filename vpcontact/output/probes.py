@@ -111,12 +111,14 @@ class ProbeHistory:
             return np.zeros((0, len(self.columns)))
         cells = self._cell[self._mine]
         pairs = [i * dim + j for i, j in _pairs(dim)]
-        parts = [self.u.eval(self._x, cells).reshape(len(cells), -1),
-                 self.cells.stress.eval(self._x, cells)[:, pairs],
-                 self.cells.von_mises.eval(self._x, cells).reshape(len(cells), 1)]
+
+        def at_probes(f):  # (eval returns a flat array for a single point)
+            return f.eval(self._x, cells).reshape(len(cells), -1)
+
+        parts = [at_probes(self.u), at_probes(self.cells.stress)[:, pairs],
+                 at_probes(self.cells.von_mises)]
         if self.strain is not None:
-            parts += [self.strain.tensor.eval(self._x, cells)[:, pairs],
-                      self.strain.equivalent.eval(self._x, cells).reshape(len(cells), 1)]
+            parts += [at_probes(self.strain.tensor)[:, pairs], at_probes(self.strain.equivalent)]
         return np.hstack(parts)
 
     def record(self, t: float) -> None:
