@@ -129,7 +129,7 @@ gap = 0.0
     bottom = np.array([[float(v) for v in r[1:8]] for r in rows_csv
                        if r[-1] == "bottom" and float(r[0]) == 1.0])
     bottom = bottom[np.argsort(bottom[:, 0])]
-    force = -np.trapz(bottom[:, 6], bottom[:, 0])
+    force = np.trapz(bottom[:, 6], bottom[:, 0])   # (the pressure, positive in compression)
     assert abs(force / bottom_y - 1) < 0.05, (force, bottom_y)
 
 
