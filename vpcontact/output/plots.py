@@ -72,8 +72,10 @@ def tidy(ax, three_d: bool = False) -> None:
     axes = [ax.xaxis, ax.yaxis] + ([ax.zaxis] if three_d else [])
     for axis in axes:
         axis.set_major_locator(MaxNLocator(4 if three_d else TICKS))
-    if three_d:
+    if three_d:  # (small tick labels, and the axis labels clear of them)
         ax.tick_params(labelsize=7)
+        for axis in axes:
+            axis.labelpad = 10
 
 
 def save(fig, path: str | Path) -> None:
