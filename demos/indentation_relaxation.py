@@ -83,7 +83,7 @@ def _relaxation_figure(out: Path, session) -> None:
     for when in (t[np.argmin(np.abs(t - RAMP))], t[-1]):
         at = np.isclose(rows["t"], when)
         order = np.argsort(rows["x"][at])
-        ax_b.plot(rows["x"][at][order], -rows["pressure"][at][order], "o-", ms=3,
+        ax_b.plot(rows["x"][at][order], rows["pressure"][at][order], "o-", ms=3,
                   label=f"t = {when:.3g}")
     ax_b.set(xlabel="x1", ylabel="contact pressure −σ_ν", title="(b) pressure along the top")
     ax_b.legend()

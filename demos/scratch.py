@@ -96,7 +96,7 @@ def _figure(out: Path, session) -> None:
     slipping = rows["slipping"] > 0
     # in contact: on the tip (no clearance) and pressed. (The nodal pressure alone would also
     # mark a P2 midpoint just off the tip's edge: it is the lumped pressure of its facets.)
-    pressed = (rows["pressure"] < -1e-6 * np.abs(rows["pressure"]).max()) & (rows["clearance"] <= 0)
+    pressed = (rows["pressure"] > 1e-6 * np.abs(rows["pressure"]).max()) & (rows["clearance"] <= 0)
     sticking = pressed & ~slipping
     ax_c.plot(rows["x"][slipping], rows["t"][slipping], "r.", ms=2, label="slipping")
     ax_c.plot(rows["x"][sticking], rows["t"][sticking], "b.", ms=2, label="sticking")

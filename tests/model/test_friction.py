@@ -734,10 +734,10 @@ def test_contact_csv_holds_the_friction_state(shared_tmp_path):
     rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
     col = {name: i for i, name in enumerate(header)}
     last = rows[np.isclose(rows[:, 0], 1.0)]
-    inside = last[:, col["pressure"]] < 0
+    inside = last[:, col["pressure"]] > 0
     assert inside.sum() >= 10 and np.all(last[inside, col["slipping"]] == 1)
     assert np.allclose(last[inside, col["tangential_traction"]],
-                       -0.3 * last[inside, col["pressure"]], rtol=1e-8)
+                       0.3 * last[inside, col["pressure"]], rtol=1e-8)
     for x in np.unique(rows[:, 1]):  # the accumulated slip is the sum of the increments
         node = rows[rows[:, 1] == x]
         assert np.allclose(np.cumsum(node[:, col["slip_increment"]]), node[:, col["slip"]])
@@ -796,11 +796,11 @@ def test_contact_csv_holds_a_signorini_part_s_friction(shared_tmp_path):
     rows = np.array([[float(v) for v in line.split(",")] for line in lines[1:]])
     col = {name: i for i, name in enumerate(header)}
     last = rows[np.isclose(rows[:, 0], 1.0)]
-    inside = last[:, col["pressure"]] < -1e-9
+    inside = last[:, col["pressure"]] > 1e-9
     assert inside.sum() >= 10 and np.all(last[inside, col["slipping"]] == 1)
     # nodal: |t| = 0.3 λ_i / A_i, λ_i / A_i the lumped pressure
     assert np.allclose(last[inside, col["tangential_traction"]],
-                       -0.3 * last[inside, col["pressure"]], rtol=1e-6)
+                       0.3 * last[inside, col["pressure"]], rtol=1e-6)
 
 
 @pytest.mark.parametrize("floor", ["rigid", "compliant"])

@@ -69,7 +69,7 @@ def test_indenter_on_hexahedra_is_felt(scene_text, shared_tmp_path):
     assert summary["reactions"]["final"]["bottom"][2] == pytest.approx(-force, rel=1e-8)
     rows = np.loadtxt(out / "contact.csv", delimiter=",", skiprows=1)
     last = rows[rows[:, 0] == rows[:, 0].max()]  # t, x, y, z, u_normal, gap, clearance, pressure
-    active = last[:, 7] < -1e-8 * np.abs(last[:, 7]).max()
+    active = last[:, 7] > 1e-8 * np.abs(last[:, 7]).max()
     assert active.sum() >= 1
     np.testing.assert_allclose(last[active, 4], last[active, 5], atol=1e-9)
     assert np.all(last[:, 4] <= last[:, 5] + 1e-9)

@@ -124,6 +124,7 @@ contact_csv = true
 figures = false
 every = 2
 checkpoint_every = 0
+probes = [[1.0, 0.5, 0.5], [2, 1, 1]]
 """
 
 # Mostly defaults: a 2-D linear law and a signorini gap with a sphere obstacle left out.
@@ -339,7 +340,7 @@ KEYS_BEFORE_THE_REGISTRY = {
     "time": ("T", "k", "max_cuts", "scheme", "tolerance"),
     "discretization": ("degree", "formulation"),
     "solver": ("predictor", "linear", "petsc_options"),
-    "output": ("xdmf", "contact_csv", "figures", "every", "checkpoint_every"),
+    "output": ("xdmf", "contact_csv", "figures", "every", "checkpoint_every", "probes"),
 }
 
 

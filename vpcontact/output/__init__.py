@@ -5,8 +5,11 @@ Takes a problem (and for :class:`Session` a built scene); gives files in an outp
 
 * :mod:`.fields`: cell-averaged stress and von Mises norm (:class:`CellStress`), the XDMF time
   series (:class:`XdmfSeries`, for ParaView) and the contact history (:class:`ContactHistory`,
-  ``contact.csv``);
-* :mod:`.plots`: PNG figures of the deformed state and the contact history (matplotlib, Agg);
+  ``contact.csv``, pressure positive in compression);
+* :mod:`.strains`: the viscoplastic strain ε_vp = ε − E⁻¹σ and its equivalent, per cell;
+* :mod:`.probes`: point histories (``[output] probes``, ``probes.csv``);
+* :mod:`.plots`, :mod:`.contact_figures`: PNG figures of the deformed state, the forces, the
+  contact pressure and the contact history (matplotlib, Agg);
 * :mod:`.runner`: :func:`run`, the time loop that writes these step by step, and its
   :class:`RunRecord`;
 * :mod:`.session`: :class:`Session`, one simulation of a scene as ``vpcontact run`` does it:

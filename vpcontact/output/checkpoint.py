@@ -12,7 +12,9 @@ Format (version 1), in ``DIR/checkpoint/``:
   (ghosts included): u, the quadrature-point stress, previous stress and strain, tangent, the
   law's internal variables (σ33 in plane strain), the predictor's last two displacements, the
   BDF2 history, the values of the matrix the VI's lagged solver had factorized; on every rank the
-  reaction history and on rank 0 the contact history (times, u_ν, gap, pressure per node).
+  reaction history and on rank 0 the contact history (times, u_ν, gap, and under the key
+  ``history_pressure`` the normal stress σ_ν per node, negative in compression: the model's
+  sign, which the outputs turn into the pressure −σ_ν) and the probes' history.
 
 A checkpoint is written every ``[output] checkpoint_every`` steps (default 10; 0: only when
 interrupted) and when the run is interrupted. Writing is atomic: every rank writes its archive
@@ -56,6 +58,7 @@ class Restart:
     control: dict       # next_dt, cuts
     history: dict       # contact history arrays (rank 0; empty elsewhere)
     forces: dict        # reaction history arrays
+    probes: dict = dataclasses.field(default_factory=dict)  # probe history (rank 0; may be empty)
 
 
 def _jsonable(value):
@@ -80,7 +83,7 @@ class Checkpointer:
     def due(self, step: int) -> bool:
         return self.every > 0 and step % self.every == 0
 
-    def write(self, record, control, history, forces) -> None:
+    def write(self, record, control, history, forces, probes=None) -> None:
         problem, comm = self.problem, self.comm
         scalars, arrays = problem.checkpoint()
         step = problem.step_index
@@ -99,6 +102,8 @@ class Checkpointer:
             arrays.update(forces_arrays(forces))
         if history is not None and comm.rank == 0:
             arrays.update(history_arrays(history))
+        if probes is not None and comm.rank == 0:
+            arrays.update({f"probes_{k}": v for k, v in probes.arrays().items()})
         path = target / f"rank-{comm.rank:04d}.npz"
         try:
             tmp = path.with_suffix(".tmp")
@@ -141,7 +146,7 @@ def history_arrays(history) -> dict:
         return {"history_times": np.zeros(0)}
     arrays = {"history_times": np.array(history.times),
               "history_un": np.array(history.normal_displacement),
-              "history_pressure": np.array(history.pressure),
+              "history_pressure": np.array(history.normal_stress),   # σ_ν
               "history_gap": np.array(history.gaps)}
     arrays.update({f"history_{key}": np.array(records)
                    for key, records in history.records.items()})
@@ -191,8 +196,9 @@ def load(out: Path, problem, scene, comm) -> Restart:
     problem.restore(manifest["problem"], arrays)
     history = {k[8:]: v for k, v in arrays.items() if k.startswith("history_")}
     forces = {k[7:]: v for k, v in arrays.items() if k.startswith("forces_")}
+    probes = {k[7:]: v for k, v in arrays.items() if k.startswith("probes_")}
     return Restart(manifest["step"], manifest["time"], manifest["record"], manifest["control"],
-                   history, forces)
+                   history, forces, probes)
 
 
 def _mismatch(manifest: dict, scene, comm) -> Optional[str]:

@@ -51,7 +51,20 @@ class CellStress:
         num_cells = state.num_cells
         q_dofs = state.stress.function_space.dofmap.list.array.reshape(num_cells, -1)
         self._q_dofs = q_dofs
-        self._dg_dofs = self.von_mises.function_space.dofmap.list.array.reshape(num_cells)
+        #: the DG0 dof of each cell (owned and ghost), in the cells' order
+        self.dg_dofs = self.von_mises.function_space.dofmap.list.array.reshape(num_cells)
+
+    @classmethod
+    def of(cls, problem) -> "CellStress":
+        """The cell stress of ``problem`` (its σ33 in plane strain, its formulation's
+        correction of the normal stresses)."""
+        return cls(problem.state, getattr(problem.law, "out_of_plane_stress", None),
+                   problem.stress_correction_at_points)
+
+    def mean(self, values: np.ndarray) -> np.ndarray:
+        """Per cell the rule-weighted mean ``(cells, n)`` of quadrature-point ``values``
+        ``(points, n)`` (in the quadrature space's dof order)."""
+        return np.einsum("q,cqn->cn", self._weights, values[self._q_dofs])
 
     def update(self) -> None:
         """Recompute both fields from the current quadrature stress."""
@@ -64,7 +77,7 @@ class CellStress:
             values = values.copy()
             values[..., :dim] += added[..., None]
         mean = np.einsum("q,cqn->cn", self._weights, values)
-        self.stress.x.array.reshape(-1, dim * dim)[self._dg_dofs] = \
+        self.stress.x.array.reshape(-1, dim * dim)[self.dg_dofs] = \
             from_mandel(mean, dim).reshape(-1, dim * dim)
         s33 = None
         if self._out_of_plane is not None and len(self._out_of_plane()) == st.num_points:
@@ -72,7 +85,7 @@ class CellStress:
             if added is not None:
                 s33_points = s33_points + added
             s33 = np.einsum("q,cq->c", self._weights, s33_points)
-        self.von_mises.x.array[self._dg_dofs] = von_mises(mean, dim, s33)
+        self.von_mises.x.array[self.dg_dofs] = von_mises(mean, dim, s33)
 
 
 class XdmfSeries:
@@ -206,6 +219,10 @@ class ContactHistory:
     """u_ν, gap and nodal σ_ν at the nodes of every contact part over time, gathered on rank 0
     (part by part, in the problem's order; ``part`` holds each node's part index).
 
+    The history keeps the model's normal stress σ_ν (negative in compression); what it writes
+    and draws is the contact pressure p = −σ_ν (positive in compression, as contact codes
+    report it): :attr:`pressure`.
+
     Args:
         problem: the problem.
         parts: the contact parts to record (default: all of the problem's).
@@ -225,7 +242,7 @@ class ContactHistory:
         self.gaps: list[np.ndarray] = []      # at each recorded time (obstacles may move)
         self.times: list[float] = []
         self.normal_displacement: list[np.ndarray] = []
-        self.pressure: list[np.ndarray] = []
+        self.normal_stress: list[np.ndarray] = []   # σ_ν per node (the model's sign)
         #: what the parts report at their nodes beyond u_ν, gap and σ_ν (each kind once, in
         #: the parts' order; a part without one reports zeros), and its records
         self.outputs = _merged(p.nodal_outputs() for p in self.parts)
@@ -244,7 +261,7 @@ class ContactHistory:
 
     def record(self, t: float) -> None:
         un = self._gathered(lambda p: p.nodes.normal_displacement(self.problem.u))
-        pressure = self._gathered(lambda p: p.pressure())
+        normal_stress = self._gathered(lambda p: p.pressure())   # σ_ν
         gap = self._gathered(lambda p: p.nodes.gap)
         extra = {key: self._gathered(lambda p, key=key: nodal_values(p, key))
                  for key in self.records}
@@ -252,7 +269,7 @@ class ContactHistory:
             self.gaps.append(gap)
             self.times.append(t)
             self.normal_displacement.append(un)
-            self.pressure.append(pressure)
+            self.normal_stress.append(normal_stress)
             for key, values in extra.items():
                 self.records[key].append(values)
 
@@ -263,7 +280,7 @@ class ContactHistory:
         self.times = [float(t) for t in arrays["times"]]
         if self.times:
             self.normal_displacement = list(arrays["un"])
-            self.pressure = list(arrays["pressure"])
+            self.normal_stress = list(arrays["pressure"])   # (σ_ν, as checkpoints hold it)
             self.gaps = list(arrays["gap"])
             self.records = {key: list(arrays[key]) for key in self.records}
 
@@ -283,13 +300,20 @@ class ContactHistory:
             scale = max(1.0, float(np.abs(np.array(self.gaps)[:, at]).max()))
             touched = bool((clearance[solved] <= 1e-10 * scale).any())
         else:
-            touched = bool((np.array(self.pressure)[solved, at] < 0).any())
+            touched = bool((np.array(self.normal_stress)[solved, at] < 0).any())
         k, i = np.unravel_index(int(np.argmin(clearance)), clearance.shape)
         return {"touched": touched, "clearance": float(clearance[k, i]),
                 "time": float(self.times[k]), "point": self.points[at[i]].tolist()}
 
+    @property
+    def pressure(self) -> list[np.ndarray]:
+        """The contact pressure p = −σ_ν per node at each recorded time (rank 0): positive
+        in compression, zero off contact (``0 − σ_ν``: no negative zeros)."""
+        return [0.0 - s for s in self.normal_stress]
+
     def write_csv(self, path: str | Path) -> None:
-        """Long format: t, x, y, z, u_normal, gap, clearance, pressure (and, with several
+        """Long format: t, x, y, z, u_normal, gap, clearance, pressure (p = −σ_ν, positive in
+        compression; and, with several
         contact parts, part: the boundary part's name), written by rank 0; the file is on disk
         when any rank returns. ``gap`` is the obstacle's distance from the node's reference
         position along its normal (it changes when the obstacle moves), ``clearance`` =

@@ -1,5 +1,11 @@
 # SPDX-License-Identifier: MIT
-"""Figures of the paper's kind: deformed configurations and contact histories (matplotlib, Agg)."""
+"""Figures of a run (matplotlib, Agg): the deformed configuration and the forces; the helpers
+every figure shares (colour ranges, colour bars, ticks). The contact figures are in
+:mod:`vpcontact.output.contact_figures`.
+
+Axes name the quantity only: a scene has no unit system of its own (its numbers are in whatever
+consistent units the user chose), so no unit is printed.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +14,15 @@ from pathlib import Path
 import numpy as np
 
 from vpcontact.model.extent import mesh_extent
-from vpcontact.output.fields import ContactHistory, boundary_faces, deformed_cells
+from vpcontact.output.fields import boundary_faces, deformed_cells
+
+#: A field whose values spread by at most this fraction of their largest magnitude is drawn as
+#: uniform (:func:`colour_range`).
+UNIFORM_SPREAD = 1e-9
+#: The half-width of a uniform field's colour range, relative to its value.
+UNIFORM_HALF_WIDTH = 0.05
+#: Major ticks per axis at most (fewer than matplotlib's default, so that labels never overlap).
+TICKS = 5
 
 
 def _pyplot():
@@ -16,6 +30,59 @@ def _pyplot():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     return plt
+
+
+def colour_range(values) -> tuple[float, float]:
+    """(vmin, vmax) of the colour scale of ``values`` (NaN and inf ignored).
+
+    A uniform field — max − min ≤ :data:`UNIFORM_SPREAD` · max|v| — gets a fixed range of
+    ±:data:`UNIFORM_HALF_WIDTH` of its value around it (±1 around 0), so that it is drawn in
+    one colour, the middle of the map, instead of as its round-off stretched over the whole
+    map under an offset colour bar. Any other field gets (min, max).
+    """
+    v = np.asarray(values, dtype=float).ravel()
+    v = v[np.isfinite(v)]
+    if not v.size:
+        return -1.0, 1.0
+    lo, hi = float(v.min()), float(v.max())
+    size = max(abs(lo), abs(hi))
+    if hi - lo > UNIFORM_SPREAD * size and size > 0:
+        return lo, hi
+    centre = 0.5 * (lo + hi)
+    half = UNIFORM_HALF_WIDTH * abs(centre) if centre != 0 else 1.0
+    return centre - half, centre + half
+
+
+def colorbar(fig, mappable, ax, label: str, **kwargs):
+    """A colour bar with at most :data:`TICKS` ticks and no offset (values as they are)."""
+    from matplotlib.ticker import MaxNLocator, ScalarFormatter
+    bar = fig.colorbar(mappable, ax=ax, label=label, **kwargs)
+    bar.locator = MaxNLocator(TICKS)
+    formatter = ScalarFormatter(useOffset=False)
+    formatter.set_powerlimits((-3, 4))
+    bar.formatter = formatter
+    bar.update_ticks()
+    return bar
+
+
+def tidy(ax, three_d: bool = False) -> None:
+    """At most :data:`TICKS` major ticks on each axis (4 on a 3-D axes, whose labels crowd),
+    numbers without an offset where the axis allows it."""
+    from matplotlib.ticker import MaxNLocator
+    axes = [ax.xaxis, ax.yaxis] + ([ax.zaxis] if three_d else [])
+    for axis in axes:
+        axis.set_major_locator(MaxNLocator(4 if three_d else TICKS))
+    if three_d:  # (small tick labels, and the axis labels clear of them)
+        ax.tick_params(labelsize=7)
+        for axis in axes:
+            axis.labelpad = 10
+
+
+def save(fig, path: str | Path) -> None:
+    """Write ``fig`` (PNG, 140 dpi) and close it."""
+    plt = _pyplot()
+    fig.savefig(path, dpi=140)
+    plt.close(fig)
 
 
 def deformed_configuration(path: str | Path, u, von_mises, title: str, scale: float | None = None) -> None:
@@ -37,38 +104,46 @@ def deformed_configuration(path: str | Path, u, von_mises, title: str, scale: fl
     if comm.rank != 0:
         return
     plt = _pyplot()
+    vmin, vmax = colour_range(values)
     if dim == 2:
         from matplotlib.collections import PolyCollection
         fig, ax = plt.subplots(figsize=(6.4, 5.2))
         coll = PolyCollection(polys, array=values, cmap="viridis", edgecolors="k", linewidths=0.1)
+        coll.set_clim(vmin, vmax)
         ax.add_collection(coll)
         ax.autoscale()
         ax.set_aspect("equal")
-        ax.set(xlabel="x1 [m]", ylabel="x2 [m]")
+        ax.set(xlabel="x1", ylabel="x2")
+        tidy(ax)
     else:
         from mpl_toolkits.mplot3d.art3d import Poly3DCollection
         fig = plt.figure(figsize=(8, 5))
         ax = fig.add_subplot(projection="3d")
         coll = Poly3DCollection(polys, array=values, cmap="viridis", edgecolors="k", linewidths=0.05)
+        coll.set_clim(vmin, vmax)
         ax.add_collection3d(coll)
         lo, hi = polys.reshape(-1, 3).min(axis=0), polys.reshape(-1, 3).max(axis=0)
         ax.set(xlim=(lo[0], hi[0]), ylim=(lo[1], hi[1]), zlim=(lo[2], hi[2]),
                xlabel="x1", ylabel="x2", zlabel="x3")
         ax.set_box_aspect(hi - lo)
-    fig.colorbar(coll, ax=ax, label="von Mises norm [N/m²]", shrink=0.8)
+        tidy(ax, three_d=True)
+    colorbar(fig, coll, ax, "von Mises norm", shrink=0.8)
     ax.set_title(f"{title}\n(displacements × {scale:.3g})")
     fig.tight_layout()
-    fig.savefig(path, dpi=140)
-    plt.close(fig)
+    save(fig, path)
 
 
-def contact_evolution(path: str | Path, history: ContactHistory, axis: int, title: str,
+def contact_evolution(path: str | Path, history, axis: int | None, title: str,
                       line: tuple[int, float] | None = None, obstacle: bool = True,
                       part: int = 0) -> None:
-    """u_ν-component of a contact part's nodes: (a) along it at several times, (b) over time.
+    """u_ν-component of a contact part's nodes (from a
+    :class:`~vpcontact.output.fields.ContactHistory`): (a) along it at several times, (b) over
+    time. (``vpcontact run`` draws a 3-D contact face as maps instead:
+    :func:`vpcontact.output.contact_figures.face_maps`.)
 
     Args:
-        axis: coordinate along which nodes are ordered on the horizontal axis (0 = x1).
+        axis: coordinate along which nodes are ordered on the horizontal axis (0 = x1; None:
+            the one along which the part's nodes spread most).
         line: ``(coordinate, value)`` selecting nodes on a line in 3-D (e.g. x2 = 0.5).
         part: index of the contact part in the history.
     Rank 0 only (the history is gathered there).
@@ -80,6 +155,8 @@ def contact_evolution(path: str | Path, history: ContactHistory, axis: int, titl
     sel = history.part == part
     if not sel.any():
         return
+    if axis is None:
+        axis = int(np.argmax(np.ptp(pts[sel], axis=0)))
     if line is not None:
         c, val = line
         nearest = pts[sel][np.argmin(np.abs(pts[sel, c] - val)), c]
@@ -96,7 +173,7 @@ def contact_evolution(path: str | Path, history: ContactHistory, axis: int, titl
         ax_a.plot(xs, u[i], color=cmap(times[i] / times[-1]), label=f"t = {times[i]:.2f}")
     if obstacle:
         ax_a.plot(xs, normal_sign * history.gap[sel][order], "k--", lw=1.2, label="obstacle")
-    ax_a.set(xlabel=f"x{axis + 1} [m]", ylabel="normal displacement component [m]",
+    ax_a.set(xlabel=f"x{axis + 1}", ylabel="normal displacement component",
              title="(a) along the contact boundary")
     # the displacements set the scale: an obstacle far from a few nodes (rims of a curved
     # face) is clipped rather than flattening every curve
@@ -111,11 +188,83 @@ def contact_evolution(path: str | Path, history: ContactHistory, axis: int, titl
     ax_a.legend(fontsize=7, ncol=2)
     for j in np.unique(np.linspace(0, len(xs) - 1, 6).round().astype(int)):
         ax_b.plot(times, u[:, j], label=f"x{axis + 1} = {xs[j]:.2f}")
-    ax_b.set(xlabel="t [s]", ylabel="normal displacement component [m]", title="(b) over time")
+    ax_b.set(xlabel="t", ylabel="normal displacement component", title="(b) over time")
     ax_b.legend(fontsize=7)
     for ax in (ax_a, ax_b):
         ax.grid(alpha=0.3)
+        tidy(ax)
     fig.suptitle(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=140)
-    plt.close(fig)
+    save(fig, path)
+
+
+def force_history(path: str | Path, forces, title: str) -> None:
+    """Reactions and contact forces against time (a); for a driven run, each contact part that
+    carries a force against the driving displacement, one panel per part (b, c, …) — none where
+    the driver does not move or no part carries a force (rank 0).
+
+    Args:
+        forces: a :class:`~vpcontact.output.forces.ForceHistory`.
+    """
+    if forces.comm.rank != 0 or not forces.times:
+        return
+    plt = _pyplot()
+    panels = _driven_parts(forces)
+    fig, axes = plt.subplots(1, 1 + len(panels), figsize=(6 + 4.6 * len(panels), 4.2),
+                             squeeze=False)
+    axes = axes[0]
+    _forces_over_time(axes[0], forces)
+    d = np.array(forces.driver, dtype=float)
+    parts = np.array(forces.parts)
+    for k, (ax, i) in enumerate(zip(axes[1:], panels)):
+        ax.plot(d, np.linalg.norm(parts[:, i], axis=1), "o-", ms=3)
+        ax.set(xlabel="driving displacement", ylabel="|contact force|",
+               title=f"({'bcdefgh'[k]}) '{forces.contact_names[i]}' against the displacement")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        tidy(ax)
+    fig.suptitle(title)
+    fig.tight_layout()
+    save(fig, path)
+
+
+def _driven_parts(forces) -> list[int]:
+    """The contact parts whose force against the driving displacement means something: the
+    driver moves during the run, and the part carries a force (beyond round-off)."""
+    if not forces.driver or forces.driver[-1] is None:
+        return []
+    d = np.array(forces.driver, dtype=float)
+    d = d[np.isfinite(d)]
+    if not (len(d) and d.max() > d.min()):
+        return []
+    parts = np.array(forces.parts)
+    if parts.size == 0:
+        return []
+    size = np.linalg.norm(parts, axis=2)                # (times, parts)
+    scale = max(float(size.max(initial=0.0)),
+                float(np.abs(np.array(forces.reactions)).max(initial=0.0)))
+    return [i for i in range(parts.shape[1]) if size[:, i].max() > 1e-9 * scale]
+
+
+def _forces_over_time(ax, forces) -> None:
+    """Panel (a): every reaction and contact-force component that is not round-off."""
+    t = np.array(forces.times)
+    reactions = np.array(forces.reactions)
+    contact = np.array(forces.contact)
+    tiny = 1e-9 * max(np.abs(reactions).max(initial=0.0), np.abs(contact).max(initial=0.0))
+    curves = [(reactions[:, i, a], "-", f"{name}, {'xyz'[a]}")
+              for i, name in enumerate(forces.names) for a in range(forces.dim)]
+    curves += [(contact[:, a], "--", f"contact, {'xyz'[a]}") for a in range(forces.dim)]
+    if forces.per_part:
+        parts = np.array(forces.parts)
+        curves += [(parts[:, i, a], ":", f"{name}, {'xyz'[a]}")
+                   for i, name in enumerate(forces.contact_names) for a in range(forces.dim)]
+    for values, style, label in curves:
+        if np.abs(values).max() > tiny:
+            ax.plot(t, values, style, label=label)
+    ax.set(xlabel="t", ylabel="force", title="(a) reactions and contact force")
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=7)
+    else:  # nothing touched and nothing was held: say so rather than draw an empty legend
+        ax.text(0.5, 0.5, "every force is zero", ha="center", va="center",
+                transform=ax.transAxes)

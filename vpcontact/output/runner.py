@@ -16,6 +16,8 @@ from vpcontact.errors import INTERNAL_ERROR, OutputError, VpcontactError
 from vpcontact.output.checkpoint import Checkpointer, Restart, restore_control
 from vpcontact.output.forces import ForceHistory
 from vpcontact.output.lock import check_folder
+from vpcontact.output.probes import ProbeHistory
+from vpcontact.output.strains import ViscoplasticStrain
 
 #: Step lines (``verbose``) go to this logger at INFO; :func:`vpcontact.cli.configure_logging`
 #: shows vpcontact's INFO messages on standard output.
@@ -96,6 +98,10 @@ class RunParts:
         checkpoints: writes checkpoints; ``restart`` continues a run from one (the problem has
             been restored already; outputs are appended).
         record: filled in place (so that a caller keeps it when the run fails).
+        cells: the cell stress fields (default: made for the problem).
+        strain: the viscoplastic strain fields (default: made for the problem's law), written
+            into the XDMF series where the law flows.
+        probes: the point histories (``probes.csv``), made with ``cells`` and ``strain``.
     """
 
     history: Optional[ContactHistory] = None
@@ -106,6 +112,9 @@ class RunParts:
     checkpoints: Optional[Checkpointer] = None
     restart: Optional[Restart] = None
     record: Optional[RunRecord] = None
+    cells: Optional[CellStress] = None
+    strain: Optional[ViscoplasticStrain] = None
+    probes: Optional[ProbeHistory] = None
 
 
 def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Path] = None,
@@ -129,8 +138,9 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     if restart is not None:
         restore_control(control, restart)
     comm = problem.mesh.comm
-    cells = CellStress(problem.state, getattr(problem.law, "out_of_plane_stress", None),
-                       problem.stress_correction_at_points)
+    cells = parts.cells if parts.cells is not None else CellStress.of(problem)
+    strain = parts.strain if parts.strain is not None else ViscoplasticStrain.of(problem, cells)
+    probes = parts.probes
     if out is not None:
         check_folder(out)  # (a file there, or a path under one: a located refusal)
         if comm.rank == 0:
@@ -140,26 +150,26 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
     if restart is not None:
         _restore_record(record, restart.record)
     start = _time.perf_counter()  # wall_time covers everything output_time counts
-    series = (_open_series(problem, out, options, parts, cells, record)
+    series = (_open_series(problem, out, options, parts, (cells, strain), record)
               if out is not None and options.xdmf else None)
     if history is None and problem.contact_dofs is not None:
         history = ContactHistory(problem, [p for p in problem.contacts if p.bounded])
-    _start_histories(history, forces, restart)
+    _start_histories((history, forces, probes), restart)
     interrupted = stop.agreed(comm) if stop is not None else None  # a signal during set-up
     try:
         if interrupted and checkpoints is not None:
             with _timed(record, out):
-                checkpoints.write(record, control, history, forces)
+                checkpoints.write(record, control, history, forces, probes)
         for step in advance(problem, t_final, control) if not interrupted else ():
             last = step.time >= t_final * (1 - 1e-12)
             _record_step(problem, step, last, record, out, options, parts.progress,
-                         (history, forces, series))
+                         (history, forces, series, probes))
             interrupted = stop.agreed(comm) if stop is not None else None
             if last:  # a signal during the last step came too late: the run is done
                 interrupted = None
             if checkpoints is not None and (interrupted or checkpoints.due(step.step)):
                 with _timed(record, out):
-                    checkpoints.write(record, control, history, forces)
+                    checkpoints.write(record, control, history, forces, probes)
             if interrupted:
                 break
         else:
@@ -170,19 +180,23 @@ def run(problem: QuasistaticProblem, t_final: float, dt: float, out: Optional[Pa
         raise
     finally:
         record.cuts = list(control.cuts)
-        _close_outputs(record, out, options, cells, (history, forces, series))
+        _close_outputs(record, out, options, cells, (history, forces, series, probes))
         record.wall_time = _time.perf_counter() - start
     record.interrupted = interrupted
     return record, history, cells
 
 
-def _open_series(problem, out: Path, options: RunOptions, parts: RunParts, cells: CellStress,
+def _open_series(problem, out: Path, options: RunOptions, parts: RunParts, fields: tuple,
                  record: RunRecord) -> XdmfSeries:
-    """The XDMF series of u, the cell stress and the extra fields (appended to on a restart;
-    an unreadable one is set aside, with a warning in ``record``)."""
+    """The XDMF series of u, the cell stress, the viscoplastic strain (where the law flows)
+    and the extra fields (appended to on a restart; an unreadable one is set aside, with a
+    warning in ``record``)."""
     name, restart = options.name, parts.restart
+    cells, strain = fields
     with _timed(record, out):
         extra = [(f, lambda: None) for f in problem.fields.output_functions()]
+        if strain is not None and not getattr(problem.law, "rate_free", False):
+            extra += strain.xdmf_fields()
         series = XdmfSeries(Path(out) / f"{name}.xdmf", problem.u, cells,
                             extra=extra + list(parts.xdmf_extra),
                             append=restart is not None)
@@ -194,26 +208,28 @@ def _open_series(problem, out: Path, options: RunOptions, parts: RunParts, cells
     return series
 
 
-def _start_histories(history, forces, restart: Optional[Restart]) -> None:
-    """The contact and force histories from a checkpoint's records, or from the initial
-    state's."""
+def _start_histories(histories: tuple, restart: Optional[Restart]) -> None:
+    """The contact, force and probe histories from a checkpoint's records, or from the
+    initial state's."""
+    history, forces, probes = histories
     if restart is not None:
         if history is not None:
             history.restore(restart.history)
         if forces is not None:
             forces.restore(restart.forces)
+        if probes is not None:
+            probes.restore(restart.probes)
     else:
-        if history is not None:
-            history.record(0.0)
-        if forces is not None:
-            forces.record(0.0)
+        for recorder in histories:
+            if recorder is not None:
+                recorder.record(0.0)
 
 
 def _record_step(problem, step, last: bool, record: RunRecord, out: Optional[Path],
                  options: RunOptions, progress, outputs: tuple) -> None:
     """An accepted step into the run record, the histories and (every ``xdmf_every``-th step
     and the last) the XDMF series; then the progress callback and the log line."""
-    history, forces, series = outputs
+    history, forces, series, probes = outputs
     record.times.append(step.time)
     record.newton_iterations.append(step.newton_iterations)
     record.reasons.append(step.reason)
@@ -225,6 +241,8 @@ def _record_step(problem, step, last: bool, record: RunRecord, out: Optional[Pat
             history.record(step.time)
         if forces is not None:
             forces.record(step.time)
+        if probes is not None:
+            probes.record(step.time)
         if series is not None and (step.step % options.xdmf_every == 0 or last):
             series.write(step.time)
     if progress is not None:
@@ -238,7 +256,7 @@ def _record_step(problem, step, last: bool, record: RunRecord, out: Optional[Pat
 def _close_outputs(record: RunRecord, out: Optional[Path], options: RunOptions,
                    cells: CellStress, outputs: tuple) -> None:
     """Close the XDMF series, update the cell stress and write the CSV histories."""
-    history, forces, series = outputs
+    history, forces, series, probes = outputs
     with _timed(record, out):
         if series is not None:
             series.close()
@@ -248,6 +266,8 @@ def _close_outputs(record: RunRecord, out: Optional[Path], options: RunOptions,
             history.write_csv(Path(out) / options.csv_name)
         if out is not None and forces is not None:
             forces.write_csv(Path(out) / "reactions.csv")
+        if out is not None and probes is not None:
+            probes.write_csv(Path(out) / "probes.csv")
 
 
 def _abort(comm, err: Exception) -> None:

@@ -1,8 +1,10 @@
 # SPDX-License-Identifier: MIT
 """One simulation of a built scene and everything it writes.
 
-Into the output folder: the XDMF series (u, stress, von Mises norm; if ``[output] xdmf``),
-``contact.csv`` (per contact node and step: u_ν, gap, pressure; if ``[output] contact_csv``),
+Into the output folder: the XDMF series (u, stress, von Mises norm, viscoplastic strain and its
+equivalent, contact pressure; if ``[output] xdmf``),
+``contact.csv`` (per contact node and step: u_ν, gap, pressure p = −σ_ν; if
+``[output] contact_csv``), ``probes.csv`` (``[output] probes``: u, stress and ε_vp at points),
 ``reactions.csv`` (per step: the reaction of each Dirichlet part and the contact force; always),
 PNG figures of the final state, the contact history and the forces (if ``[output] figures``)
 and always
@@ -31,8 +33,10 @@ from petsc4py import PETSc
 from vpcontact import __version__
 from vpcontact.errors import InputError, Interrupted, ObstacleOutOfReach, OutputError
 from vpcontact.model.constitutive import Perzyna
-from vpcontact.output import checkpoint, plots, runner
-from vpcontact.output.fields import ContactHistory, nodal_values, on_rank0
+from vpcontact.output import checkpoint, contact_figures, plots, runner
+from vpcontact.output.fields import CellStress, ContactHistory, nodal_values, on_rank0
+from vpcontact.output.probes import probe_history
+from vpcontact.output.strains import ViscoplasticStrain
 from vpcontact.output.forces import ForceHistory
 from vpcontact.scene.builder import Model
 from vpcontact.scene.schema import SceneError
@@ -93,6 +97,7 @@ class Session:
             OutputError: an output could not be written (what could be written was).
         """
         scene, problem = self.model.scene, self.model.problem
+        cells, strain, probes = self._cell_fields()  # (a probe off the mesh: refused here)
         if self.resume:
             self.restart = checkpoint.load(self.out, problem, scene, self.comm)
         else:  # a fresh run: an older run's checkpoint must not be resumed on top of it
@@ -114,7 +119,8 @@ class Session:
             parts = runner.RunParts(
                 history=history, forces=self.forces,
                 xdmf_extra=tuple(self._pressure_field(history)), progress=self._progress,
-                stop=self.stop, checkpoints=checkpoints, restart=self.restart, record=record)
+                stop=self.stop, checkpoints=checkpoints, restart=self.restart, record=record,
+                cells=cells, strain=strain, probes=probes)
             _, history, cells = runner.run(problem, scene.time.T, scene.time.k, out=self.out,
                                            options=options, parts=parts)
         except Exception as err:  # re-raised below once the summary is on disk
@@ -143,6 +149,20 @@ class Session:
                              sum(record.newton_iterations), len(record.cuts), wall,
                              self.model.problem.solver.total_iterations,
                              self.comm.size, self.out.resolve(), tuple(warnings))
+
+    def _cell_fields(self) -> tuple:
+        """The cell stress, the viscoplastic strain and the probes' history (None without
+        ``[output] probes``); a probe outside the mesh is a located error (collective)."""
+        problem = self.model.problem
+        cells = CellStress.of(problem)
+        strain = ViscoplasticStrain.of(problem, cells)
+        try:
+            probes = probe_history(problem, self.model.scene.output.probes, cells, strain)
+        except InputError as err:
+            if err.key is None:
+                raise
+            raise self.model.scene.error(err.key, str(err)) from None
+        return cells, strain, probes
 
     def _contact_warnings(self, history: Optional[ContactHistory], record) -> list:
         """Per contact part: nodes whose rays miss the obstacle, and a part that never touched
@@ -213,21 +233,23 @@ class Session:
                 "take; it had no effect" for key in solver.unread_options()]
 
     def _history(self) -> Optional[ContactHistory]:
-        """Every contact part's nodes, when contact.csv or the figures are asked for."""
-        scene, problem = self.model.scene, self.model.problem
-        wanted = scene.output.contact_csv or scene.output.figures
-        if not wanted or not problem.contacts:
+        """Every contact part's nodes (recorded whenever the scene has contact: the warning of
+        a part that never touched needs it even when neither contact.csv nor the figures are
+        written)."""
+        problem = self.model.problem
+        if not problem.contacts:
             return None
         return ContactHistory(problem)
 
     def _pressure_field(self, history):
-        """Nodal contact pressure σ_ν as a P1 field (zero off the contact parts; P_k: its
-        vertex values) and the fields of what the parts report at their nodes (with friction
+        """Nodal contact pressure p = −σ_ν (positive in compression) as a P1 field (zero off
+        the contact parts; P_k: its vertex values) and the fields of what the parts report at their nodes (with friction
         the tangential traction |σ_τ| and whether each node slipped in the step, 1, or not, 0:
         :attr:`ContactHistory.outputs` with a ``field``)."""
         if history is None:
             return ()
-        fields = [self._nodal_field(history, "contact_pressure", lambda part: part.pressure())]
+        fields = [self._nodal_field(history, "contact_pressure",
+                                    lambda part: 0.0 - part.pressure())]
         fields += [self._nodal_field(history, o.field, lambda part, key=o.key:
                                      nodal_values(part, key))
                    for o in history.outputs if o.field is not None]
@@ -270,17 +292,35 @@ class Session:
         if scene.dim >= 2:
             plots.deformed_configuration(self.out / "final_state.png", problem.u, cells.von_mises,
                                          f"{scene.name}: von Mises norm at t = {scene.time.T:g}")
-        self.forces.plot(self.out / "reactions.png",
-                         f"{scene.name}: support reactions and contact force")
-        if history is not None and scene.dim >= 2:
-            axis = 0
-            line = (1, 0.5 * sum(_bounds(problem, 1))) if scene.dim == 3 else None
-            for i, part in enumerate(history.parts):
-                suffix = "" if i == 0 else f"_{part.name}"
-                plots.contact_evolution(
-                    self.out / f"contact_history{suffix}.png", history, axis=axis,
-                    title=f"{scene.name}: normal displacement of the contact nodes of "
-                          f"'{part.name}'", line=line, obstacle=part.bounded, part=i)
+        plots.force_history(self.out / "reactions.png", self.forces,
+                            f"{scene.name}: support reactions and contact force")
+        if history is None or scene.dim < 2:
+            return
+        for i, part in enumerate(history.parts):
+            suffix = "" if i == 0 else f"_{part.name}"
+            self._contact_figures(history, i, suffix)
+
+    def _contact_figures(self, history, i: int, suffix: str) -> None:
+        """The contact part ``i``'s pressure and normal displacement: along the boundary over
+        time (2-D), maps of the contact face at a few times (3-D)."""
+        scene, part = self.model.scene, history.parts[i]
+        name = f"{scene.name}: '{part.name}'"
+        pressure_png = self.out / f"contact_pressure{suffix}.png"
+        history_png = self.out / f"contact_history{suffix}.png"
+        if scene.dim == 2:
+            contact_figures.pressure_profiles(pressure_png, history, i,
+                                              f"{name}: contact pressure along the boundary")
+            plots.contact_evolution(history_png, history, axis=None, obstacle=part.bounded,
+                                    title=f"{name}: normal displacement of the contact nodes",
+                                    part=i)
+            return
+        contact_figures.face_maps(pressure_png, history, i, history.pressure,
+                                  "contact pressure −σ_ν", f"{name}: contact pressure")
+        sign = part.nodes.sign
+        contact_figures.face_maps(history_png, history, i,
+                                  [sign * u for u in history.normal_displacement],
+                                  "normal displacement component",
+                                  f"{name}: normal displacement of the contact nodes")
 
     def _write_summary(self, record, wall: float, error: Optional[Exception],
                        warnings: list) -> None:
@@ -341,12 +381,6 @@ def _located(scene, err: Exception) -> Exception:
            f"{where}.rotation" if contact.rotation is not None else
            f"{where}.force" if contact.force is not None else f"{where}.obstacle")
     return scene.error(key, str(err))
-
-
-def _bounds(problem, axis: int):
-    x = problem.mesh.geometry.x[:, axis]
-    comm = problem.mesh.comm
-    return comm.allreduce(float(x.min()), op=MPI.MIN), comm.allreduce(float(x.max()), op=MPI.MAX)
 
 
 def _versions() -> dict:

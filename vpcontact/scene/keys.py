@@ -274,6 +274,9 @@ TABLES: dict[str, tuple[Key, ...]] = {
         _k("every", "integer", 1, "—", "XDMF stride in steps (the last step is always written)"),
         _k("checkpoint_every", "integer", 10, "—",
            "steps between checkpoints (0: only when interrupted)"),
+        _k("probes", "array of points (one number per dimension each)", (), "length",
+           "points whose displacement, stress and viscoplastic strain go to probes.csv",
+           shown="no probes"),
     ),
 }
 

@@ -79,7 +79,7 @@ def read_scene(data: dict, report: Report, base_dir: Path, default_name: str) ->
         "time": read_time(top),
         **read_discretization(top, dim, material, law),
         "solver": read_solver(top),
-        "output": read_output(top, contacts),
+        "output": read_output(top, contacts, dim),
         "defaulted": defaulted(data, dim, law),
     }
 
@@ -441,8 +441,9 @@ def _petsc_option_problem(key: str, value: Any) -> str | None:
     return None
 
 
-def read_output(top: Table, contacts: tuple) -> OutputSpec:
-    """``[output]``: XDMF, contact CSV (only with contact), figures, XDMF stride, checkpoints."""
+def read_output(top: Table, contacts: tuple, dim: int | None = None) -> OutputSpec:
+    """``[output]``: XDMF, contact CSV (only with contact), figures, XDMF stride, checkpoints,
+    probes."""
     t = top.section("output", keys("output"))
     contact_csv = t.boolean("contact_csv", bool(contacts))
     if contact_csv and not contacts:
@@ -452,4 +453,26 @@ def read_output(top: Table, contacts: tuple) -> OutputSpec:
                       every=t.integer("every", default("output", "every"), check=at_least(1)),
                       checkpoint_every=t.integer("checkpoint_every",
                                                  default("output", "checkpoint_every"),
-                                                 check=at_least(0)))
+                                                 check=at_least(0)),
+                      probes=_read_probes(t, dim))
+
+
+def _read_probes(t: Table, dim: int | None) -> tuple:
+    """``[output] probes``: points ``[[x, y(, z)], …]`` of ``dim`` finite numbers each (whether
+    they lie in the mesh is checked once it is built: :mod:`vpcontact.output.probes`)."""
+    raw = t.data.get("probes", default("output", "probes"))
+    if not isinstance(raw, (list, tuple)):
+        t.add("probes", f"expected an array of points [[x, y(, z)], …], got {type_name(raw)}")
+        return ()
+    points = []
+    for i, item in enumerate(raw):
+        numbers = isinstance(item, list) and all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+            for v in item)
+        if not numbers or (dim is not None and len(item) != dim):
+            t.report.add(join(t.at("probes"), i),
+                         f"expected a point of {dim or 'one per dimension'} finite numbers, "
+                         f"got {fmt(item)}")
+        else:
+            points.append(tuple(float(v) for v in item))
+    return tuple(points)

@@ -287,3 +287,5 @@ class OutputSpec:
     figures: bool = True
     every: int = 1
     checkpoint_every: int = 10
+    #: points whose histories go to probes.csv (``[output] probes``)
+    probes: tuple[tuple[float, ...], ...] = ()

@@ -167,5 +167,6 @@ def dump(scene: Any) -> str:
     output = scene.output
     blocks += _table("output", {"xdmf": output.xdmf, "contact_csv": output.contact_csv,
                                 "figures": output.figures, "every": output.every,
-                                "checkpoint_every": output.checkpoint_every})
+                                "checkpoint_every": output.checkpoint_every,
+                                "probes": output.probes or None})
     return "\n".join(blocks)
