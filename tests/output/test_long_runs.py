@@ -123,10 +123,10 @@ def test_sigterm_on_two_ranks_and_resume(tmp_path):
     round-off too). The scene is the bundled indentation (contact spreading while the specimen
     flows), whose steps are never cut, so both runs take the same steps and can be compared row
     by row; on the paper's 2-D test round-off can turn a borderline Newton solve into a cut step
-    and the two runs then take different step sequences."""
-    text = scenes.bundled()["indentation_relaxation"].read_text()
+    and the two runs then take different step sequences. (Its own mesh, graded towards the
+    contact, has 1 519 vertices.)"""
     scene = tmp_path / "scene.toml"
-    scene.write_text(re.sub(r"(?m)^cells = .*$", "cells = [48, 24]", text))
+    scene.write_text(scenes.bundled()["indentation_relaxation"].read_text())
     full, cut = tmp_path / "full", tmp_path / "cut"
     assert _run(scene, full, 2, "--quiet").returncode == 0
     assert _summary(full)["rejected_steps"] == []

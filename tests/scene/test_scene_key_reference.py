@@ -166,6 +166,7 @@ SHAPES_2D = """\
 type = "rectangle"
 cells = [4, 2]
 diagonal = "crossed"
+refine = [{ lower = [0.0, 0.5], upper = [1.0, 1.0] }]
 
 [boundary.bottom]
 kind = "clamped"
@@ -323,7 +324,8 @@ def test_reference_page_lists_every_key(tmp_path):
 KEYS_BEFORE_THE_REGISTRY = {
     "": ("name", "description", "mesh", "boundary", "loads", "material", "law", "contact",
          "initial", "time", "discretization", "solver", "output"),
-    "mesh": ("type", "lower", "upper", "cells", "cell_type", "diagonal", "file", "dim"),
+    "mesh": ("type", "lower", "upper", "cells", "cell_type", "diagonal", "refine", "file", "dim"),
+    "mesh.refine[]": ("lower", "upper"),  # (added with issue 45)
     "boundary.<name>": ("kind", "tag", "plane", "box", "where", "traction", "displacement"),
     "boundary.<name>.plane": ("axis", "value", "tol"),
     "boundary.<name>.box": ("lower", "upper"),

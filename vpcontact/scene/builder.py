@@ -151,9 +151,27 @@ def _mesh(scene: Scene, comm):
         return dmesh.create_interval(comm, spec.cells[0], [lower[0], upper[0]]), None
     if spec.dim == 2:
         diagonal = _DIAGONALS[spec.diagonal or "right"]
-        return dmesh.create_rectangle(comm, [lower, upper], list(spec.cells), cell,
-                                      diagonal=diagonal), None
-    return dmesh.create_box(comm, [lower, upper], list(spec.cells), cell), None
+        mesh = dmesh.create_rectangle(comm, [lower, upper], list(spec.cells), cell,
+                                      diagonal=diagonal)
+    else:
+        mesh = dmesh.create_box(comm, [lower, upper], list(spec.cells), cell)
+    for box_lower, box_upper in spec.refine:
+        mesh = refined_in_box(mesh, np.array(box_lower), np.array(box_upper))
+    return mesh, None
+
+
+def refined_in_box(mesh, lower: np.ndarray, upper: np.ndarray):
+    """``mesh`` with every edge that lies in the box [lower, upper] split (Plaza's refinement,
+    which splits neighbouring cells as needed to keep the mesh conforming)."""
+    dim = mesh.topology.dim
+    tol = 1e-12 * float(np.max(upper - lower))
+
+    def inside(x):
+        return np.all((x[:dim] >= lower[:, None] - tol) & (x[:dim] <= upper[:, None] + tol), axis=0)
+
+    mesh.topology.create_entities(1)
+    edges = dmesh.locate_entities(mesh, 1, inside)
+    return dmesh.refine(mesh, edges, redistribute=True)
 
 
 def _read_gmsh(scene: Scene, comm):

@@ -119,6 +119,9 @@ TABLES: dict[str, tuple[Key, ...]] = {
            ("interval", "triangle", "quadrilateral", "tetrahedron", "hexahedron")),
         _k("diagonal", "string", "right", "—", "diagonal pattern of a triangle mesh",
            ("right", "left", "crossed", "left/right", "right/left")),
+        _k("refine", "array of tables {lower, upper}", (), "—",
+           "boxes in which a built-in triangle or tetrahedron mesh is refined, once per box, in "
+           "order (edges inside the box are split; neighbouring cells are split to conform)"),
         _k("file", "string", REQUIRED, "—", "Gmsh .msh file, relative to the scene (type = \"gmsh\")"),
         _k("dim", "integer", REQUIRED, "—", "the Gmsh mesh's dimension (type = \"gmsh\")", (2, 3)),
     ),
@@ -158,6 +161,10 @@ TABLES: dict[str, tuple[Key, ...]] = {
     "loads.point[]": (
         _k("at", _VEC, REQUIRED, "length", "where the load acts: a mesh vertex"),
         _k("force", _EXPRS + " of t", REQUIRED, "force", "the force F(t)"),
+    ),
+    "mesh.refine[]": (
+        _k("lower", _VEC, REQUIRED, "length", "lower corner of the box"),
+        _k("upper", _VEC, REQUIRED, "length", "upper corner of the box"),
     ),
     "material": (
         _k("E", "number", REQUIRED, "stress", "Young's modulus, > 0"),
@@ -282,7 +289,8 @@ TABLES: dict[str, tuple[Key, ...]] = {
 
 #: How each table is written in a scene file.
 TITLES = {
-    "": "Top level", "mesh": "[mesh]", "boundary.<name>": "[boundary.<name>]",
+    "": "Top level", "mesh": "[mesh]",
+    "mesh.refine[]": "[mesh] refine = [{…}, …]", "boundary.<name>": "[boundary.<name>]",
     "boundary.<name>.plane": "[boundary.<name>] plane = {…}",
     "boundary.<name>.box": "[boundary.<name>] box = {…}", "loads": "[loads]",
     "loads.point[]": "[[loads.point]]", "material": "[material]", "law": "[law]",

@@ -43,6 +43,8 @@ SCENE_NAME = r"[A-Za-z0-9][A-Za-z0-9_.-]{0,63}"
 PETSC_KEY = r"[A-Za-z0-9_]+"
 AXES = {"x": 0, "y": 1, "z": 2}
 MAX_CELLS = 5_000_000
+#: Each refinement box at most quadruples (2-D) or octuples (3-D) the cells it covers.
+MAX_REFINE_BOXES = 8
 MAX_STEPS = 10_000_000
 MAX_CUTS = 50
 #: Cells per box of the structured grid, by cell type (crossed triangles: 4).
@@ -139,16 +141,62 @@ def _builtin_mesh(t: Table, mesh_type: str) -> MeshSpec:
         diagonal = t.choice("diagonal", DIAGONALS, default("mesh", "diagonal"))
     elif cell_type is not None:
         t.forbid("diagonal", "only for triangle meshes")
+    refine = _refine_boxes(t, dim, cell_type)
     if cells is not None and cell_type is not None:
         count = math.prod(cells) * CELLS_PER_BOX[cell_type] * (2 if diagonal == "crossed" else 1)
         if count > MAX_CELLS:
             t.add("cells", f"too many cells ({count}, at most {MAX_CELLS})")
+        elif refine and lower is not None and upper is not None:
+            estimate = _refined_count(count, lower, upper, refine)
+            if estimate > MAX_CELLS:
+                t.add("refine", f"too many cells after refinement (about {estimate:.3g}, at most "
+                                f"{MAX_CELLS})")
     return MeshSpec(mesh_type, dim, lower=lower, upper=upper, cells=cells, cell_type=cell_type,
-                    diagonal=diagonal)
+                    diagonal=diagonal, refine=refine)
+
+
+def _refined_count(count: int, lower, upper, boxes) -> float:
+    """An estimate of the cell count after refinement: each box splits the cells it covers (by
+    its share of the domain's volume) into 2^dim, and as many again around it to conform."""
+    dim, volume = len(lower), math.prod(b - a for a, b in zip(lower, upper))
+    for box_lower, box_upper in boxes:
+        share = math.prod(max(0.0, min(b, bu) - max(a, bl))
+                          for a, b, bl, bu in zip(lower, upper, box_lower, box_upper)) / volume
+        count += 2 * share * count * (2 ** dim - 1)
+    return count
+
+
+def _refine_boxes(t: Table, dim: int, cell_type: str | None) -> tuple:
+    """``refine = [{lower, upper}, …]``: boxes of local refinement (triangles, tetrahedra)."""
+    raw = t.data.get("refine", [])
+    if not isinstance(raw, list):
+        t.add("refine", f"expected an array of tables {{lower, upper}}, got {type_name(raw)}")
+        return ()
+    if raw and cell_type not in ("triangle", "tetrahedron"):
+        t.add("refine", f"local refinement needs triangle or tetrahedron cells, got {cell_type!r}")
+        return ()
+    if len(raw) > MAX_REFINE_BOXES:
+        t.add("refine", f"at most {MAX_REFINE_BOXES} boxes (each refines once), got {len(raw)}")
+        return ()
+    boxes = []
+    for i, item in enumerate(raw):
+        if not isinstance(item, dict):
+            t.report.add(join(t.at("refine"), i), f"expected a table, got {type_name(item)}")
+            continue
+        box = Table(t.report, join(t.at("refine"), i), item, keys("mesh.refine[]"))
+        lower, upper = box.numbers("lower", dim), box.numbers("upper", dim)
+        if lower is None or upper is None:
+            continue
+        if any(not b > a for a, b in zip(lower, upper)):
+            box.add("upper", f"must exceed lower in every direction, got lower = {list(lower)}, "
+                             f"upper = {list(upper)}")
+            continue
+        boxes.append((tuple(lower), tuple(upper)))
+    return tuple(boxes)
 
 
 def _gmsh_mesh(t: Table, base_dir: Path) -> MeshSpec:
-    for key in ("lower", "upper", "cells", "cell_type", "diagonal"):
+    for key in ("lower", "upper", "cells", "cell_type", "diagonal", "refine"):
         t.forbid(key, "only for built-in meshes (interval, rectangle, box)")
     dim = t.choice("dim", (2, 3))
     name = t.string("file", max_length=4096)

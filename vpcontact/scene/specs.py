@@ -43,6 +43,8 @@ class MeshSpec:
         cell_type: cell type of a built-in mesh (``None`` for Gmsh).
         diagonal: diagonal pattern of a triangle mesh (``None`` otherwise).
         file: absolute path of the Gmsh file (``None`` for built-in meshes).
+        refine: boxes ``(lower, upper)`` in which a built-in simplex mesh is refined, once per
+            box, in order (empty: none).
     """
 
     type: str
@@ -53,6 +55,7 @@ class MeshSpec:
     cell_type: str | None = None
     diagonal: str | None = None
     file: Path | None = None
+    refine: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...] = ()
 
     @property
     def builtin(self) -> bool:

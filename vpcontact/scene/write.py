@@ -122,7 +122,8 @@ def dump(scene: Any) -> str:
     if mesh.builtin:
         blocks += _table("mesh", {"type": mesh.type, "lower": mesh.lower, "upper": mesh.upper,
                                   "cells": mesh.cells, "cell_type": mesh.cell_type,
-                                  "diagonal": mesh.diagonal})
+                                  "diagonal": mesh.diagonal,
+                                  "refine": [{"lower": lo, "upper": up} for lo, up in mesh.refine]})
     else:
         blocks += _table("mesh", {"type": mesh.type, "file": mesh.file, "dim": mesh.dim})
     for name, part in scene.boundaries.items():
