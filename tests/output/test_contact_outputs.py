@@ -50,6 +50,7 @@ nu = 0.3
 [contact]
 type = "signorini"
 boundary = "floor"
+gap = 0.0
 
 [time]
 T = 1.0
