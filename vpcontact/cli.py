@@ -256,10 +256,16 @@ def _show(args, comm) -> int:
 
 
 def _validate(args, comm) -> int:
+    from vpcontact.output.probes import locate
     from vpcontact.scene.builder import build
     from vpcontact.scene.describe import choices
     scene = _load(args.scene, args.overrides)
     model = build(scene, comm)  # mesh-level checks: empty or overlapping parts, tags, points
+    if scene.output.probes:  # (as the run does before its first step)
+        try:
+            locate(model.problem.mesh, scene.output.probes)
+        except InputError as err:
+            raise scene.error(err.key, str(err)) from None
     _warn(scene, model, comm)
     model.problem.solver.destroy()
     if comm.rank == 0:

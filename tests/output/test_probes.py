@@ -72,11 +72,14 @@ def test_probes_csv_holds_the_closed_form_of_a_creeping_bar(shared_tmp_path, sce
     assert rows["eps_vp_eq"].max() == pytest.approx(2 / 3 * (S - SIGMA_Y) / MU_STAR, rel=1e-9)
 
 
-def test_a_probe_outside_the_mesh_is_a_located_error(shared_tmp_path, scene_text, capsys):
+@pytest.mark.parametrize("command", ["run", "validate"])
+def test_a_probe_outside_the_mesh_is_a_located_error(shared_tmp_path, scene_text, capsys,
+                                                     command):
     probes = PROBES[:2] + [(2.5, 0.5, 0.5)]
     path = _scene(shared_tmp_path, scene_text, probes=probes)
     out = shared_tmp_path / "outside"
-    assert cli.main(["run", str(path), "--out", str(out), "--quiet"]) == 2
+    extra = ["--out", str(out), "--quiet"] if command == "run" else []
+    assert cli.main([command, str(path)] + extra) == 2
     err = capsys.readouterr().err
     if MPI.COMM_WORLD.rank == 0:
         line = 1 + path.read_text().splitlines().index(

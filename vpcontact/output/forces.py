@@ -26,7 +26,6 @@ from typing import Optional
 import numpy as np
 
 from vpcontact.output.fields import on_rank0
-from vpcontact.output.plots import _pyplot
 
 
 class ForceHistory:
@@ -125,48 +124,3 @@ class ForceHistory:
         return {f"{kind}_force": {"final": float(history[-1, k]) if len(history) else None,
                                   "history": history[:, k].tolist()}
                 for k, kind in enumerate(("normal", "tangential"))}
-
-    def plot(self, path: str | Path, title: str) -> None:
-        """Reactions and contact force against time and, for a driven run, the contact force
-        against the driving displacement (rank 0)."""
-        if self.comm.rank != 0 or not self.times:
-            return
-        plt = _pyplot()
-        driven = self.driver[-1] is not None
-        fig, axes = plt.subplots(1, 2 if driven else 1, figsize=(11 if driven else 6, 4.2))
-        axes = np.atleast_1d(axes)
-        t = np.array(self.times)
-        reactions = np.array(self.reactions)
-        contact = np.array(self.contact)
-        # components that are round-off next to the largest force are left out
-        tiny = 1e-9 * max(np.abs(reactions).max(initial=0.0), np.abs(contact).max(initial=0.0))
-        for i, name in enumerate(self.names):
-            for a in range(self.dim):
-                if np.abs(reactions[:, i, a]).max() > tiny:
-                    axes[0].plot(t, reactions[:, i, a], label=f"{name}, {'xyz'[a]}")
-        for a in range(self.dim):
-            if np.abs(contact[:, a]).max() > tiny:
-                axes[0].plot(t, contact[:, a], "--", label=f"contact, {'xyz'[a]}")
-        if self.per_part:
-            parts = np.array(self.parts)
-            for i, name in enumerate(self.contact_names):
-                for a in range(self.dim):
-                    if np.abs(parts[:, i, a]).max() > tiny:
-                        axes[0].plot(t, parts[:, i, a], ":", label=f"{name}, {'xyz'[a]}")
-        axes[0].set(xlabel="t [s]", ylabel="force [N]", title="(a) reactions and contact force")
-        if axes[0].get_legend_handles_labels()[0]:
-            axes[0].legend(fontsize=7)
-        else:  # nothing touched and nothing was held: say so rather than draw an empty legend
-            axes[0].text(0.5, 0.5, "every force is zero", ha="center", va="center",
-                         transform=axes[0].transAxes)
-        if driven:
-            d = np.array(self.driver, dtype=float)
-            axes[1].plot(d, np.linalg.norm(contact, axis=1), "o-", ms=3)
-            axes[1].set(xlabel="driving displacement [m]", ylabel="|contact force| [N]",
-                        title="(b) contact force against displacement")
-        for ax in axes:
-            ax.grid(alpha=0.3)
-        fig.suptitle(title)
-        fig.tight_layout()
-        fig.savefig(path, dpi=140)
-        plt.close(fig)
